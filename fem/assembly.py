@@ -1,0 +1,162 @@
+"""Degree-of-freedom maps, constraints and sparse assembly.
+
+Constraints are eliminated at the element level: every full dof maps to a reduced dof with a
+coefficient (+1, or -1 for the n = 1 axis tie U_t = -U_r) or to none (fixed, possibly at a
+prescribed value). Element matrices are scattered straight into the reduced system, so no
+transformation product T^T K T is ever formed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from .elements import dofs_per_node
+from .mesh import Mesh
+
+UR, UZ, UT = 0, 1, 2
+COMPONENTS = {"ur": UR, "uz": UZ, "ut": UT}
+
+
+@dataclass(frozen=True)
+class DofMap:
+    """Map from the full nodal dofs of one Fourier mode to the reduced (free) system.
+
+    Attributes:
+        mode: circumferential order n.
+        dofs_per_node: 2 (n = 0) or 3.
+        master: (n_full,) reduced index of each full dof, -1 if fixed.
+        coef: (n_full,) coefficient multiplying the master value.
+        prescribed: (n_full,) value of fixed dofs (m); zero for homogeneous constraints.
+        element_dofs: (ne, nd) full dof indices of each element.
+        n_free: size of the reduced system.
+    """
+
+    mode: int
+    dofs_per_node: int
+    master: NDArray
+    coef: NDArray
+    prescribed: NDArray
+    element_dofs: NDArray
+    n_free: int
+
+    @property
+    def n_full(self) -> int:
+        return self.master.size
+
+    def expand(self, u_free: NDArray) -> NDArray:
+        """Full nodal dof vector (n_full,) or (n_full, k) from a reduced solution."""
+        u_free = np.asarray(u_free)
+        shape = (self.n_full,) + u_free.shape[1:]
+        u = np.zeros(shape, dtype=np.result_type(u_free, self.prescribed))
+        free = self.master >= 0
+        coef = self.coef[free].reshape((-1,) + (1,) * (u_free.ndim - 1))
+        u[free] = coef * u_free[self.master[free]]
+        if u_free.ndim == 1:
+            u[~free] = self.prescribed[~free]
+        return u
+
+    def nodal(self, u_full: NDArray) -> NDArray:
+        """(n_nodes, 3) nodal (U_r, U_z, U_t) from a full dof vector (U_t = 0 for n = 0)."""
+        vals = u_full.reshape(-1, self.dofs_per_node)
+        out = np.zeros((vals.shape[0], 3), dtype=vals.dtype)
+        out[:, : self.dofs_per_node] = vals
+        return out
+
+
+def axis_constraints(mode: int) -> tuple[list[int], bool]:
+    """Conditions on r = 0 for a smooth field: (components fixed to zero, tie U_t = -U_r).
+
+    n = 0: U_r = 0 (U_t absent). n = 1: U_z = 0 and U_r + U_t = 0 (a translation across the
+    axis). n >= 2: everything zero.
+    """
+    if mode == 0:
+        return [UR], False
+    if mode == 1:
+        return [UZ], True
+    return [UR, UZ, UT], False
+
+
+def build_dofmap(mesh: Mesh, mode: int,
+                 fixed: Sequence[tuple[NDArray, int]] = (),
+                 prescribed: Sequence[tuple[NDArray, int, NDArray]] = ()) -> DofMap:
+    """Number the free dofs of ``mode`` on ``mesh``.
+
+    Args:
+        fixed: (node indices, component) pairs held at zero.
+        prescribed: (node indices, component, values in m) pairs held at given values.
+    """
+    ndpn = dofs_per_node(mode)
+    n_full = mesh.n_nodes * ndpn
+    is_fixed = np.zeros(n_full, dtype=bool)
+    values = np.zeros(n_full, dtype=complex)
+    coef = np.ones(n_full)
+    tie_to = np.arange(n_full)
+
+    axis_nodes = mesh.nodes_where(lambda r, z: r <= 1e-12 * max(1.0, float(mesh.r_lines[-1])))
+    axis_fixed, tie = axis_constraints(mode)
+    for comp in axis_fixed:
+        is_fixed[axis_nodes * ndpn + comp] = True
+    for nodes, comp in fixed:
+        if comp < ndpn:
+            is_fixed[np.asarray(nodes) * ndpn + comp] = True
+    for nodes, comp, vals in prescribed:
+        if comp < ndpn:
+            idx = np.asarray(nodes) * ndpn + comp
+            is_fixed[idx] = True
+            values[idx] = vals
+    if tie:
+        ut = axis_nodes * ndpn + UT
+        ur = axis_nodes * ndpn + UR
+        tie_to[ut] = ur
+        coef[ut] = -1.0
+    is_fixed |= is_fixed[tie_to]  # a tied dof follows its partner
+
+    primary = (~is_fixed) & (tie_to == np.arange(n_full))
+    master = np.full(n_full, -1)
+    master[primary] = np.arange(int(primary.sum()))
+    master = np.where(is_fixed, -1, master[tie_to])
+    if not np.iscomplexobj(values) or not np.any(values.imag):
+        values = values.real
+    nen = mesh.elements.shape[1]
+    element_dofs = (mesh.elements[:, :, None] * ndpn + np.arange(ndpn)).reshape(-1, nen * ndpn)
+    return DofMap(mode, ndpn, master, np.where(is_fixed, 0.0, coef), values, element_dofs,
+                  int(primary.sum()))
+
+
+def assemble_matrix(dm: DofMap, Ke: NDArray) -> sp.csr_matrix:
+    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix."""
+    rows = dm.master[dm.element_dofs]
+    coefs = dm.coef[dm.element_dofs]
+    R = np.broadcast_to(rows[:, :, None], Ke.shape)
+    C = np.broadcast_to(rows[:, None, :], Ke.shape)
+    keep = (R >= 0) & (C >= 0)
+    vals = (Ke * (coefs[:, :, None] * coefs[:, None, :]))[keep]
+    A = sp.coo_matrix((vals, (R[keep], C[keep])), shape=(dm.n_free, dm.n_free))
+    return A.tocsr()
+
+
+def assemble_vector(dm: DofMap, f_full: NDArray) -> NDArray:
+    """Reduce a full nodal load vector: f_red = T^T f."""
+    free = dm.master >= 0
+    dtype = np.result_type(f_full, float)
+    out = np.zeros(dm.n_free, dtype=dtype)
+    np.add.at(out, dm.master[free], dm.coef[free] * f_full[free])
+    return out
+
+
+def prescribed_load(dm: DofMap, Ke: NDArray) -> NDArray:
+    """Reduced load equivalent of the prescribed values: -T^T K u_p (zero when none)."""
+    up = dm.prescribed[dm.element_dofs]
+    out = np.zeros(dm.n_free, dtype=np.result_type(Ke, up))
+    if not np.any(up):
+        return out
+    fe = -np.einsum("eab,eb->ea", Ke, up)
+    rows = dm.master[dm.element_dofs]
+    keep = rows >= 0
+    np.add.at(out, rows[keep], (dm.coef[dm.element_dofs] * fe)[keep])
+    return out

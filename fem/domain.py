@@ -1,0 +1,225 @@
+"""The discretised body: mesh, materials per element, absorbers and boundary conditions.
+
+This layer knows SI quantities only; ``fem.simulate`` translates a scene into it. A domain is the
+layered tissue (top to bottom, z = 0 at the skin surface, z positive into the body) out to a
+radius R, optionally with rectangles painted above the skin (a haptic unit), and whatever the
+outer side and base need (``fem.absorbers``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import absorbers
+from .assembly import UR, UT, UZ
+from .mesh import Mesh, build_mesh, graded_lines, growing_size
+
+SIDES = ("absorbing", "fixed", "free")
+BASES = ("fixed", "absorbing", "free")
+
+
+@dataclass(frozen=True)
+class Solid:
+    """Linear (visco)elastic solid in SI units: E (Pa), nu, density (kg/m^3), loss factor eta
+    (hysteretic, E* = E (1 + i eta))."""
+
+    E: float
+    nu: float
+    density: float
+    loss_factor: float = 0.0
+    name: str = ""
+
+    @property
+    def mu(self) -> float:
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def kappa(self) -> float:
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def shear_speed(self) -> float:
+        return float(np.sqrt(self.mu / self.density))
+
+
+@dataclass(frozen=True)
+class Block:
+    """A rectangle of material painted onto the grid (r0..r1, z0..z1 in m; z < 0 is above the
+    skin)."""
+
+    r0: float
+    r1: float
+    z0: float
+    z1: float
+    solid: Solid
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """Element sizes (m) and order: ``near_size`` within ``near_radius`` of the axis (and near the
+    surface), growing to ``far_size``."""
+
+    near_size: float = 0.5e-3
+    near_radius: float = 8e-3
+    far_size: float = 2e-3
+    order: int = 2
+    growth: float = 0.2
+
+
+@dataclass(frozen=True)
+class Domain:
+    """A meshed body ready for assembly.
+
+    Attributes:
+        mesh: the mesh (tissue, unit blocks, absorbing regions).
+        solids: material of each material index.
+        radius: physical radius R of the tissue model (m).
+        depth: total tissue thickness (m).
+        side, base: boundary treatments asked for.
+        stretch: PML stretch (harmonic with absorbing boundaries) or None.
+        damping: graded damping layer (transient absorber) or None.
+        fixed_nodes: nodes held at zero in every component.
+        effects: physical effects the discretisation includes, for the summary.
+        skipped: effects left out because the scene does not need them.
+    """
+
+    mesh: Mesh
+    solids: tuple[Solid, ...]
+    radius: float
+    depth: float
+    side: str
+    base: str
+    stretch: absorbers.PML | None = None
+    damping: absorbers.DampingLayer | None = None
+    fixed_nodes: NDArray = field(default_factory=lambda: np.empty(0, dtype=int))
+    effects: tuple[str, ...] = ()
+    skipped: tuple[str, ...] = ()
+
+    def element_property(self, name: str) -> NDArray:
+        """Per-element array of a Solid attribute (e.g. "mu", "density")."""
+        values = np.array([getattr(s, name) for s in self.solids])
+        return values[self.mesh.material]
+
+    def fixed(self) -> list[tuple[NDArray, int]]:
+        """Homogeneous constraints as (nodes, component) pairs for ``build_dofmap``."""
+        return [(self.fixed_nodes, c) for c in (UR, UZ, UT)]
+
+    def surface_nodes(self) -> NDArray:
+        """Nodes on the skin surface z = 0 inside the physical radius, sorted by r."""
+        m = self.mesh
+        idx = m.nodes_where(lambda r, z: (np.abs(z) < 1e-12) & (r <= self.radius * (1 + 1e-12)))
+        return idx[np.argsort(m.nodes[idx, 0])]
+
+
+def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: str, base: str,
+                   spec: MeshSpec, analysis: str, omega: float = 0.0,
+                   r_breaks: Sequence[float] = (), blocks: Sequence[Block] = (),
+                   damping_rate: float | None = None) -> Domain:
+    """Mesh layered tissue (top to bottom: (thickness m, Solid)) with the treatments asked for.
+
+    Args:
+        radius: physical radius R (m).
+        side: "absorbing" | "fixed" | "free" outer radial boundary.
+        base: "fixed" | "absorbing" | "free" bottom boundary.
+        spec: element sizes and order.
+        analysis: "static" | "harmonic" | "transient" (decides the absorber).
+        omega: angular frequency (rad/s) for harmonic/transient absorber tuning.
+        r_breaks: radii (m) that must be cell lines (load edges, unit radii).
+        blocks: rectangles above the skin (z < 0) or replacing tissue.
+        damping_rate: peak rate (1/s) of the transient damping layer (default 3 omega).
+    """
+    if side not in SIDES or base not in BASES:
+        raise ValueError(f"side must be one of {SIDES} and base one of {BASES}")
+    thick = np.array([t for t, _ in layers])
+    tissue = [s for _, s in layers]
+    depth = float(thick.sum())
+    size_r = growing_size(spec.near_radius, spec.near_size, spec.far_size, spec.growth)
+    size_z = growing_size(0.0, spec.near_size, spec.far_size, spec.growth)
+    min_cells = 2 if spec.order == 1 else 1
+
+    r_pts = [0.0, radius, *(b for b in r_breaks if 0 < b < radius)]
+    if spec.near_radius < radius:
+        r_pts.append(spec.near_radius)
+    for b in blocks:
+        r_pts += [b.r0, b.r1]
+    r_lines = graded_lines(np.array(r_pts), size_r, min_cells)
+    z_iface = np.concatenate([[0.0], np.cumsum(thick)])
+    z_lines = graded_lines(z_iface, size_z, min_cells)
+
+    effects, skipped = [], []
+    c_s = np.array([s.shear_speed for s in tissue])
+    wave = analysis != "static"
+    lam_min = float(c_s.min()) * 2 * np.pi / omega if wave else np.inf
+    h_wave = lam_min * spec.order / absorbers.ELEMENTS_PER_WAVELENGTH
+    lam_ref = absorbers.reference_speed(c_s) * 2 * np.pi / omega if wave else np.inf
+
+    def beyond(end: float, lines: NDArray, size: float, kind: str) -> absorbers.AxisLayout:
+        h_last = float(lines[-1] - lines[-2])
+        if analysis == "static":
+            effects.append(f"static far field ({kind})")
+            return absorbers.static_extension(end, h_last, size)
+        effects.append(f"{'PML' if analysis == 'harmonic' else 'damping layer'} ({kind})")
+        return absorbers.pml_layout(end, h_last, size, lam_ref, min(h_wave, 4 * spec.far_size))
+
+    r_lay = beyond(radius, r_lines, radius, "side") if side == "absorbing" else None
+    z_lay = beyond(depth, z_lines, max(depth, radius), "base") if base == "absorbing" else None
+    if r_lay is not None:
+        r_lines = np.concatenate([r_lines, r_lay.lines])
+    if z_lay is not None:
+        z_lines = np.concatenate([z_lines, z_lay.lines])
+    if blocks:
+        z_top = min(b.z0 for b in blocks)
+        z_above = sorted({b.z0 for b in blocks} | {b.z1 for b in blocks if b.z1 < 0} | {z_top})
+        above = graded_lines(np.array([*z_above, 0.0]), lambda x: np.full_like(x, spec.near_size),
+                             min_cells)
+        z_lines = np.concatenate([above[:-1], z_lines])
+
+    solids, cell = _paint(r_lines, z_lines, z_iface, tissue, blocks)
+    mesh = build_mesh(r_lines, z_lines, cell, spec.order)
+
+    stretch = damping = None
+    pml_r = r_lay.pml_start if r_lay else None
+    pml_z = z_lay.pml_start if z_lay else None
+    if analysis == "harmonic" and (pml_r is not None or pml_z is not None):
+        stretch = absorbers.PML(omega, absorbers.reference_speed(c_s), pml_r,
+                                r_lay.pml_thickness if r_lay else 0.0, pml_z,
+                                z_lay.pml_thickness if z_lay else 0.0)
+    if analysis == "transient" and (pml_r is not None or pml_z is not None):
+        damping = absorbers.DampingLayer(damping_rate or 3.0 * omega, pml_r,
+                                         r_lay.pml_thickness if r_lay else 0.0, pml_z,
+                                         z_lay.pml_thickness if z_lay else 0.0)
+
+    r_end, z_end = r_lines[-1], z_lines[-1]
+    nodes = mesh.nodes
+    fixed = np.zeros(mesh.n_nodes, dtype=bool)
+    if side in ("absorbing", "fixed"):
+        fixed |= np.isclose(nodes[:, 0], r_end) & (nodes[:, 1] >= 0)
+    if base in ("absorbing", "fixed"):
+        fixed |= np.isclose(nodes[:, 1], z_end)
+    for name, on in (("fixed side", side == "fixed"), ("fixed base", base == "fixed")):
+        (effects if on else skipped).append(name)
+    if side != "absorbing" and base != "absorbing":
+        skipped.append("absorbing boundary")
+    return Domain(mesh, solids, radius, depth, side, base, stretch, damping,
+                  np.flatnonzero(fixed), tuple(effects), tuple(skipped))
+
+
+def _paint(r_lines: NDArray, z_lines: NDArray, z_iface: NDArray, tissue: list[Solid],
+           blocks: Sequence[Block]) -> tuple[tuple[Solid, ...], NDArray]:
+    """Material index per cell: tissue layers by depth (the last layer continues into a base
+    absorber), then blocks painted on top in order; cells above the skin not covered are void."""
+    rc = 0.5 * (r_lines[1:] + r_lines[:-1])
+    zc = 0.5 * (z_lines[1:] + z_lines[:-1])
+    layer = np.clip(np.searchsorted(z_iface, zc, side="right") - 1, 0, len(tissue) - 1)
+    cell = np.where(zc[:, None] > 0, layer[:, None], -1) * np.ones((1, rc.size), dtype=int)
+    solids = list(tissue)
+    for b in blocks:
+        inside = ((zc[:, None] > b.z0) & (zc[:, None] < b.z1)
+                  & (rc[None, :] > b.r0) & (rc[None, :] < b.r1))
+        solids.append(b.solid)
+        cell[inside] = len(solids) - 1
+    return tuple(solids), cell

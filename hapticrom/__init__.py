@@ -1,0 +1,1 @@
+"""hapticrom command-line interface and package metadata."""
