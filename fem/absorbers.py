@@ -113,6 +113,14 @@ class PML:
         extra = amp * thickness * xi ** (self.power + 1) / (self.power + 1)
         return s, extra
 
+    def contains(self, r0: NDArray, z0: NDArray) -> NDArray:
+        """Whether cells with lower corner (r0, z0) lie in the layer (its start is a cell line)."""
+        inside = np.zeros(np.broadcast(r0, z0).shape, dtype=bool)
+        for x, start in ((r0, self.r_start), (z0, self.z_start)):
+            if start is not None:
+                inside |= np.asarray(x) >= start * (1 - 1e-12)
+        return inside
+
     def __call__(self, r: NDArray, z: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         s_r, r_extra = self._profile(r, self.r_start, self.r_thickness)
         s_z, _ = self._profile(z, self.z_start, self.z_thickness)

@@ -91,8 +91,10 @@ class GaussData:
     z: NDArray
 
 
-def gauss_data(mesh: Mesh, stretch: Stretch | None = None, n_gauss: int | None = None) -> GaussData:
-    """Evaluate shapes, derivatives and weights at tensor Gauss points of all elements."""
+def gauss_data(mesh: Mesh, stretch: Stretch | None = None, n_gauss: int | None = None,
+               subset: NDArray | None = None) -> GaussData:
+    """Evaluate shapes, derivatives and weights at tensor Gauss points of the elements
+    (all, or the indices in ``subset``)."""
     p = mesh.order
     ng1 = n_gauss or p + 1
     xg, wg = np.polynomial.legendre.leggauss(ng1)
@@ -105,9 +107,10 @@ def gauss_data(mesh: Mesh, stretch: Stretch | None = None, n_gauss: int | None =
     eta = np.repeat(xg, ng1)
     w = np.tile(wg, ng1) * np.repeat(wg, ng1)
 
-    hr, hz = mesh.cell_hr[:, None], mesh.cell_hz[:, None]
-    r = mesh.cell_r0[:, None] + 0.5 * (xi[None, :] + 1.0) * hr
-    z = mesh.cell_z0[:, None] + 0.5 * (eta[None, :] + 1.0) * hz
+    sel = slice(None) if subset is None else subset
+    hr, hz = mesh.cell_hr[sel, None], mesh.cell_hz[sel, None]
+    r = mesh.cell_r0[sel, None] + 0.5 * (xi[None, :] + 1.0) * hr
+    z = mesh.cell_z0[sel, None] + 0.5 * (eta[None, :] + 1.0) * hz
     if stretch is None:
         s_r = s_z = np.ones_like(r)
         r_t = r
@@ -141,14 +144,15 @@ def strain_operator(g: GaussData, mode: int) -> NDArray:
     return B.reshape(ne, ng, 6, nen * ndpn)
 
 
-def _gram(A: NDArray) -> NDArray:
-    """Sum over Gauss points and strain rows of A^T A: A (ne, ng, k, nd) -> (ne, nd, nd).
+def _gram(A: NDArray, w: NDArray) -> NDArray:
+    """Sum over Gauss points g and strain rows i of w_gi A_gi^T A_gi: A (ne, ng, k, nd) and
+    w (ne, ng, k) -> (ne, nd, nd).
 
     Uses the transpose, not the conjugate: the operators are complex symmetric.
     """
     ne, ng, k, nd = A.shape
     flat = A.reshape(ne, ng * k, nd)
-    return np.matmul(flat.transpose(0, 2, 1), flat)
+    return np.matmul(flat.transpose(0, 2, 1), flat * w.reshape(ne, ng * k, 1))
 
 
 def stiffness(g: GaussData, mode: int, mu: NDArray, kappa: NDArray,
@@ -165,11 +169,9 @@ def stiffness(g: GaussData, mode: int, mu: NDArray, kappa: NDArray,
     c = circumferential_factor(mode)
     B = strain_operator(g, mode)
     div = B[:, :, 0] + B[:, :, 1] + B[:, :, 2]  # (ne, ng, nd)
-    root = np.sqrt((c * g.weight * mu[:, None]).astype(complex))
-    if not (np.iscomplexobj(B) or np.iscomplexobj(mu) or np.iscomplexobj(g.weight)):
-        root = root.real
-    K = _gram(B * (_SQRT_I0[None, None, :, None] * root[..., None, None]))
-    K -= (2.0 / 3.0) * _gram((div * root[..., None])[:, :, None, :])
+    wmu = c * g.weight * mu[:, None]
+    K = _gram(B, wmu[:, :, None] * _SQRT_I0[None, None, :] ** 2)
+    K -= (2.0 / 3.0) * _gram(div[:, :, None, :], wmu[:, :, None])
     if volumetric == "full":
         cw = c * g.weight * kappa[:, None]
         return K + np.einsum("eg,ega,egb->eab", cw, div, div)

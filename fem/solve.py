@@ -29,34 +29,51 @@ class OperatorLog:
         self.built.append(f"{name}[n={mode}]")
 
 
-def moduli(domain: Domain, hysteretic: bool) -> tuple[NDArray, NDArray]:
-    """Per-element shear and bulk moduli (Pa), complex E (1 + i eta) when hysteretic."""
-    mu = domain.element_property("mu")
-    kappa = domain.element_property("kappa")
-    if hysteretic:
-        factor = 1.0 + 1j * domain.element_property("loss_factor")
-        return mu * factor, kappa * factor
-    return mu, kappa
-
-
 def has_hysteresis(domain: Domain) -> bool:
     return bool(np.any(domain.element_property("loss_factor") > 0))
 
 
 def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: OperatorLog,
                              volumetric: str = "bbar", stretch=None) -> NDArray:
-    """K* - omega^2 M + i omega C per element (PML stretch and damping layer included)."""
-    g = elements.gauss_data(domain.mesh, stretch)
-    mu, kappa = moduli(domain, has_hysteresis(domain))
-    Z = elements.stiffness(g, mode, mu, kappa, volumetric)
+    """K* - omega^2 M + i omega C per element: stiffness with hysteretic moduli E (1 + i eta),
+    mass when omega > 0, the PML stretch and the damping layer when the domain has them.
+
+    Elements outside the PML are formed in real arithmetic; complex factors enter only where an
+    effect needs them.
+    """
+    mesh = domain.mesh
+    mu, kappa = domain.element_property("mu"), domain.element_property("kappa")
+    density = domain.element_property("density")
+    eta = domain.element_property("loss_factor")
+    hysteretic = bool(np.any(eta > 0))
+    in_pml = (stretch.contains(mesh.cell_r0, mesh.cell_z0) if stretch is not None
+              else np.zeros(mesh.n_elements, dtype=bool))
+    damped = domain.damping is not None and omega > 0
+    is_complex = hysteretic or damped or bool(in_pml.any())
+    nd = mesh.elements.shape[1] * elements.dofs_per_node(mode)
+    Z = np.empty((mesh.n_elements, nd, nd), dtype=complex if is_complex else float)
+    for idx, st in ((np.flatnonzero(~in_pml), None), (np.flatnonzero(in_pml), stretch)):
+        if idx.size == 0:
+            continue
+        g = elements.gauss_data(mesh, st, subset=idx)
+        Ze = elements.stiffness(g, mode, mu[idx], kappa[idx], volumetric)
+        if hysteretic:  # nu is real, so E (1 + i eta) scales mu and kappa alike
+            Ze = Ze * (1.0 + 1j * eta[idx])[:, None, None]
+        if omega > 0:
+            Ze = Ze - omega**2 * elements.mass(g, mode, density[idx])
+        if damped:
+            rate = domain.damping.rate(g.r, g.z) * density[idx, None]
+            Ze = Ze + 1j * omega * elements.weighted_mass(g, mode, rate)
+        Z[idx] = Ze
     log.add("stiffness", mode)
+    if hysteretic:
+        log.add("hysteretic damping", mode)
     if omega > 0:
-        Z = Z - omega**2 * elements.mass(g, mode, domain.element_property("density"))
         log.add("mass", mode)
-        if domain.damping is not None:
-            rate = domain.damping.rate(g.r, g.z) * domain.element_property("density")[:, None]
-            Z = Z + 1j * omega * elements.weighted_mass(g, mode, rate)
-            log.add("damping layer", mode)
+    if damped:
+        log.add("damping layer", mode)
+    if in_pml.any():
+        log.add("PML", mode)
     return Z
 
 
@@ -94,9 +111,48 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
     return ModeSolution(mode, dm, dm.expand(u), dm.n_free)
 
 
-def factorize(A: sp.spmatrix):
-    """Sparse LU of A (SuperLU with a fill-reducing ordering), reusable across right-hand sides."""
-    return spla.splu(sp.csc_matrix(A), permc_spec="COLAMD")
+class UmfpackLU:
+    """UMFPACK (SuiteSparse, through cvxopt) LU of a sparse matrix, real or complex.
+
+    Its BLAS-3 frontal kernels factor the 2D Fourier-mode systems here about 5x faster than
+    SuperLU; SuperLU remains the fallback and the choice for many cheap re-solves.
+    """
+
+    def __init__(self, A: sp.spmatrix) -> None:
+        import cvxopt
+        from cvxopt import umfpack
+
+        A = sp.csc_matrix(A)
+        A.sort_indices()
+        self._complex = np.iscomplexobj(A.data)
+        tc = "z" if self._complex else "d"
+        cols = np.repeat(np.arange(A.shape[1]), np.diff(A.indptr))
+        self._A = cvxopt.spmatrix(cvxopt.matrix(A.data.astype(complex if self._complex else float)),
+                                  cvxopt.matrix(A.indices.astype(int)), cvxopt.matrix(cols),
+                                  A.shape, tc)
+        self._umfpack, self._cvxopt = umfpack, cvxopt
+        self._numeric = umfpack.numeric(self._A, umfpack.symbolic(self._A))
+
+    def solve(self, b: NDArray) -> NDArray:
+        """Solve A x = b for b of shape (n,) or (n, k)."""
+        rhs = self._cvxopt.matrix(np.asarray(b, dtype=complex if self._complex else float))
+        self._umfpack.solve(self._A, self._numeric, rhs)
+        return np.array(rhs).reshape(np.shape(b))
+
+
+def factorize(A: sp.spmatrix, many_solves: bool = False):
+    """Sparse LU of A with a fill-reducing ordering, reusable across right-hand sides.
+
+    UMFPACK when cvxopt is installed and few solves follow; SuperLU in symmetric mode (the
+    operators are structurally symmetric) for many cheap re-solves, as in time stepping.
+    """
+    if not many_solves:
+        try:
+            return UmfpackLU(A)
+        except ImportError:
+            pass
+    return spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True})
 
 
 def natural_frequencies(domain: Domain, mode: int, k: int = 6, sigma_hz: float = 0.0) -> NDArray:
@@ -110,7 +166,7 @@ def natural_modes(domain: Domain, mode: int, k: int = 6,
     """Natural frequencies (Hz, ascending) and full-dof mode shapes (n_full, k) of ``mode``."""
     dm = build_dofmap(domain.mesh, mode, domain.fixed())
     g = elements.gauss_data(domain.mesh)
-    mu, kappa = moduli(domain, hysteretic=False)
+    mu, kappa = domain.element_property("mu"), domain.element_property("kappa")
     K = assemble_matrix(dm, elements.stiffness(g, mode, mu, kappa))
     M = assemble_matrix(dm, elements.mass(g, mode, domain.element_property("density")))
     sigma = (2 * np.pi * sigma_hz) ** 2

@@ -1,0 +1,213 @@
+"""Material library: linear isotropic (visco)elastic solids for the forearm and the haptic unit.
+
+Every value is SI (Pa, kg/m3) and carries a ``source`` string that says where the number comes
+from. Look materials up with :func:`get_material` (case-insensitive, aliases allowed); build
+custom ones with :func:`material_from_fields`.
+
+Silicones (Smooth-On): the datasheets give specific gravity, Shore hardness and the 100 %
+tensile modulus, not the small-strain Young's modulus, and published estimates differ 2-4x
+(DESIGN.md section 4). The library default is the neo-Hookean value implied by the datasheet
+100 % modulus, E = 3 sigma_100 / (2 - 1/4) (incompressible uniaxial nominal stress
+mu (lambda - lambda^-2) at stretch 2, E = 3 mu); the alternate set fitted to public tensile data
+is :data:`SILICONE_E_TENSILE_FIT_Pa`. Silicone ``loss_factor`` defaults to 0 (purely elastic);
+a typical value for soft platinum-cure silicones at 100-200 Hz is eta ~ 0.1 (an estimate of
+order 0.05-0.3, not a datasheet number), set it per layer when damping matters.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+__all__ = [
+    "ALIASES",
+    "MATERIALS",
+    "Material",
+    "SILICONE_E_NEO_HOOKEAN_Pa",
+    "SILICONE_E_TENSILE_FIT_Pa",
+    "SILICONE_MODULUS_100_Pa",
+    "UnknownMaterialError",
+    "get_material",
+    "material_from_fields",
+]
+
+
+@dataclass(frozen=True)
+class Material:
+    """A linear isotropic solid.
+
+    ``E_Pa`` Young's modulus [Pa], ``density_kg_m3`` [kg/m3], ``nu`` Poisson's ratio [-],
+    ``loss_factor`` hysteretic damping eta [-] (complex modulus E* = E (1 + i eta)).
+    """
+
+    name: str
+    E_Pa: float
+    density_kg_m3: float
+    nu: float
+    loss_factor: float = 0.0
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        # Thermodynamic admissibility: positive E and rho, -1 < nu < 0.5, eta >= 0.
+        checks = (
+            ("E_Pa", self.E_Pa > 0, "E_Pa > 0"),
+            ("density_kg_m3", self.density_kg_m3 > 0, "density_kg_m3 > 0"),
+            ("nu", -1.0 < self.nu < 0.5, "-1 < nu < 0.5"),
+            ("loss_factor", self.loss_factor >= 0, "loss_factor >= 0"),
+        )
+        for field, ok, allowed in checks:
+            if not ok:
+                value = getattr(self, field)
+                raise ValueError(f"material {self.name!r}: {field} = {value!r}; allowed {allowed}")
+
+    @property
+    def mu_Pa(self) -> float:
+        """Shear modulus mu = E / (2 (1 + nu)) [Pa]."""
+        return self.E_Pa / (2.0 * (1.0 + self.nu))
+
+    @property
+    def lambda_Pa(self) -> float:
+        """First Lame parameter lambda = E nu / ((1 + nu)(1 - 2 nu)) [Pa]."""
+        return self.E_Pa * self.nu / ((1.0 + self.nu) * (1.0 - 2.0 * self.nu))
+
+    @property
+    def bulk_Pa(self) -> float:
+        """Bulk modulus K = E / (3 (1 - 2 nu)) [Pa]."""
+        return self.E_Pa / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def shear_speed_m_s(self) -> float:
+        """Shear (S) wave speed sqrt(mu / rho) [m/s]."""
+        return math.sqrt(self.mu_Pa / self.density_kg_m3)
+
+    @property
+    def pressure_speed_m_s(self) -> float:
+        """Pressure (P) wave speed sqrt((lambda + 2 mu) / rho) [m/s]."""
+        return math.sqrt((self.lambda_Pa + 2.0 * self.mu_Pa) / self.density_kg_m3)
+
+
+class UnknownMaterialError(KeyError, ValueError):
+    """Raised by :func:`get_material` for a name that is neither a material nor an alias."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.message = (
+            f"unknown material {name!r}; known materials: {', '.join(sorted(MATERIALS))} "
+            f"(aliases: {', '.join(sorted(ALIASES))})"
+        )
+        super().__init__(self.message)
+
+    def __str__(self) -> str:  # KeyError would repr-quote the message
+        return self.message
+
+
+_TISSUE_SRC = "Guo et al. 2025 (Biomimetics 10:597) Table 1, as read in PAPER.md"
+
+
+def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str) -> Material:
+    return Material(name, E_kPa * 1e3, density, nu, 0.0, f"{_TISSUE_SRC}: {layer}")
+
+
+#: Smooth-On datasheet 100 % tensile modulus [Pa] (DESIGN.md section 4).
+SILICONE_MODULUS_100_Pa: dict[str, float] = {
+    "ecoflex-00-10": 55e3,
+    "ecoflex-00-50": 83e3,
+    "dragon-skin-10-medium": 152e3,
+    "dragon-skin-30": 593e3,
+}
+#: Small-strain E [Pa], neo-Hookean from the datasheet 100 % modulus (library default).
+SILICONE_E_NEO_HOOKEAN_Pa: dict[str, float] = {
+    "ecoflex-00-10": 95e3,
+    "ecoflex-00-50": 142e3,
+    "dragon-skin-10-medium": 260e3,
+    "dragon-skin-30": 1016e3,
+}
+#: Small-strain E [Pa] fitted to public tensile data (Marechal et al., Soft Robotics Materials
+#: Database; DESIGN.md section 4). An alternative to the default, 2-4x softer.
+SILICONE_E_TENSILE_FIT_Pa: dict[str, float] = {
+    "ecoflex-00-10": 21e3,
+    "ecoflex-00-50": 59e3,
+    "dragon-skin-10-medium": 129e3,
+    "dragon-skin-30": 538e3,
+}
+# (specific gravity, Shore hardness, paper letter) from the Smooth-On datasheets and PAPER.md.
+_SILICONE_DATA = {
+    "ecoflex-00-10": (1.04, "00-10", "A"),
+    "ecoflex-00-50": (1.07, "00-50", "B"),
+    "dragon-skin-10-medium": (1.07, "10A", "C"),
+    "dragon-skin-30": (1.08, "30A", "D"),
+}
+
+
+def _silicone(name: str) -> Material:
+    sg, shore, letter = _SILICONE_DATA[name]
+    source = (
+        f"Smooth-On datasheet: specific gravity {sg}, Shore {shore}, 100 % modulus "
+        f"{SILICONE_MODULUS_100_Pa[name] / 1e3:g} kPa (paper's material {letter}). "
+        f"E = {SILICONE_E_NEO_HOOKEAN_Pa[name] / 1e3:g} kPa: neo-Hookean small-strain modulus "
+        f"from the 100 % modulus (default); a tensile-data fit (Marechal et al., Soft Robotics "
+        f"Materials Database) gives {SILICONE_E_TENSILE_FIT_Pa[name] / 1e3:g} kPa "
+        f"(SILICONE_E_TENSILE_FIT_Pa). nu 0.49: nearly incompressible (DESIGN.md section 4)."
+    )
+    return Material(name, SILICONE_E_NEO_HOOKEAN_Pa[name], sg * 1000.0, 0.49, 0.0, source)
+
+
+_ALL = (
+    _tissue("skin", 49.0, 1116.0, 0.47, "epidermis and dermis"),
+    _tissue("subcutaneous", 10.0, 1116.0, 0.47, "subcutaneous tissue"),
+    _tissue("muscle", 53.0, 1116.0, 0.47, "muscle"),
+    _tissue("bone", 2.94e6, 2000.0, 0.32, "skeleton"),
+    *(_silicone(name) for name in _SILICONE_DATA),
+    Material("pcb", 2.5e9, 1420.0, 0.34, 0.0, "DuPont Kapton HN polyimide film datasheet"),
+    Material(
+        "motor", 100e9, 7800.0, 0.3, 0.0,
+        "estimate: homogenised coin ERM motor (steel/brass housing); the effective density "
+        "of the real motor is computed from its mass elsewhere",
+    ),
+)
+
+#: Library keyed by canonical lower-case name.
+MATERIALS: dict[str, Material] = {m.name: m for m in _ALL}
+
+#: Alternative names (already normalised, see :func:`_normalise`) -> canonical name.
+ALIASES: dict[str, str] = {
+    "fat": "subcutaneous",
+    "epidermis-and-dermis": "skin",
+    "skeleton": "bone",
+    "a": "ecoflex-00-10",
+    "b": "ecoflex-00-50",
+    "c": "dragon-skin-10-medium",
+    "dragon-skin-10": "dragon-skin-10-medium",
+    "d": "dragon-skin-30",
+    "fpcb": "pcb",
+    "kapton": "pcb",
+}
+
+
+def _normalise(name: str) -> str:
+    # "Dragon Skin 10", "dragon_skin_10" and "dragon-skin-10" all mean the same thing.
+    return re.sub(r"[\s_\-]+", "-", name.strip().lower())
+
+
+def get_material(name: str) -> Material:
+    """Return the library material called ``name`` (case-insensitive; aliases such as "fat",
+    "A"-"D", "ecoflex 00-10" accepted). Raises :class:`UnknownMaterialError` listing the known
+    names otherwise."""
+    key = _normalise(name)
+    key = ALIASES.get(key, key)
+    if key not in MATERIALS:
+        raise UnknownMaterialError(name)
+    return MATERIALS[key]
+
+
+def material_from_fields(
+    E_kPa: float,
+    density_kg_m3: float,
+    nu: float,
+    loss_factor: float = 0.0,
+    name: str = "custom",
+    source: str = "user-defined",
+) -> Material:
+    """Build a custom :class:`Material` from user units (E in kPa, density in kg/m3)."""
+    return Material(name, E_kPa * 1e3, density_kg_m3, nu, loss_factor, source)
