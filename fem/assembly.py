@@ -51,7 +51,7 @@ class DofMap:
     def expand(self, u_free: NDArray) -> NDArray:
         """Full nodal dof vector (n_full,) or (n_full, k) from a reduced solution."""
         u_free = np.asarray(u_free)
-        shape = (self.n_full,) + u_free.shape[1:]
+        shape = (self.n_full, *u_free.shape[1:])
         u = np.zeros(shape, dtype=np.result_type(u_free, self.prescribed))
         free = self.master >= 0
         coef = self.coef[free].reshape((-1,) + (1,) * (u_free.ndim - 1))

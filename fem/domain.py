@@ -9,7 +9,7 @@ outer side and base need (``fem.absorbers``).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -82,7 +82,8 @@ class Domain:
         side, base: boundary treatments asked for.
         stretch: PML stretch (harmonic with absorbing boundaries) or None.
         damping: graded damping layer (transient absorber) or None.
-        fixed_nodes: nodes held at zero in every component.
+        constraints: (nodes, component) pairs held at zero; a fixed boundary lists its nodes
+            for every component, a roller only the normal one.
         effects: physical effects the discretisation includes, for the summary.
         skipped: effects left out because the scene does not need them.
     """
@@ -95,7 +96,7 @@ class Domain:
     base: str
     stretch: absorbers.PML | None = None
     damping: absorbers.DampingLayer | None = None
-    fixed_nodes: NDArray = field(default_factory=lambda: np.empty(0, dtype=int))
+    constraints: tuple[tuple[NDArray, int], ...] = ()
     effects: tuple[str, ...] = ()
     skipped: tuple[str, ...] = ()
 
@@ -106,7 +107,17 @@ class Domain:
 
     def fixed(self) -> list[tuple[NDArray, int]]:
         """Homogeneous constraints as (nodes, component) pairs for ``build_dofmap``."""
-        return [(self.fixed_nodes, c) for c in (UR, UZ, UT)]
+        return list(self.constraints)
+
+    def boundary_nodes(self, where: str) -> NDArray:
+        """Nodes on the outermost "side" (largest r) or "base" (largest z) of the mesh."""
+        nodes = self.mesh.nodes
+        if where == "side":
+            at_end = np.isclose(nodes[:, 0], self.mesh.r_lines[-1])
+            return np.flatnonzero(at_end & (nodes[:, 1] >= 0))
+        if where == "base":
+            return np.flatnonzero(np.isclose(nodes[:, 1], self.mesh.z_lines[-1]))
+        raise ValueError(f"where = {where!r}: allowed 'side' or 'base'")
 
     def surface_nodes(self) -> NDArray:
         """Nodes on the skin surface z = 0 inside the physical radius, sorted by r."""
@@ -193,19 +204,16 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
                                          r_lay.pml_thickness if r_lay else 0.0, pml_z,
                                          z_lay.pml_thickness if z_lay else 0.0)
 
-    r_end, z_end = r_lines[-1], z_lines[-1]
-    nodes = mesh.nodes
-    fixed = np.zeros(mesh.n_nodes, dtype=bool)
-    if side in ("absorbing", "fixed"):
-        fixed |= np.isclose(nodes[:, 0], r_end) & (nodes[:, 1] >= 0)
-    if base in ("absorbing", "fixed"):
-        fixed |= np.isclose(nodes[:, 1], z_end)
     for name, on in (("fixed side", side == "fixed"), ("fixed base", base == "fixed")):
         (effects if on else skipped).append(name)
     if side != "absorbing" and base != "absorbing":
         skipped.append("absorbing boundary")
-    return Domain(mesh, solids, radius, depth, side, base, stretch, damping,
-                  np.flatnonzero(fixed), tuple(effects), tuple(skipped))
+    domain = Domain(mesh, solids, radius, depth, side, base, stretch, damping, (),
+                    tuple(effects), tuple(skipped))
+    held = [domain.boundary_nodes(w) for w, kind in (("side", side), ("base", base))
+            if kind in ("absorbing", "fixed")]
+    nodes = np.unique(np.concatenate(held)) if held else np.empty(0, dtype=int)
+    return replace(domain, constraints=tuple((nodes, c) for c in (UR, UZ, UT)))
 
 
 def _paint(r_lines: NDArray, z_lines: NDArray, z_iface: NDArray, tissue: list[Solid],

@@ -1,8 +1,9 @@
 """Structured, graded r-z meshes of axis-aligned rectangles.
 
-The domain is a tensor grid of cell lines in r (radius, from the axis outwards) and z (depth, positive
-into the tissue, z = 0 at the skin surface). Every cell carries a material index, or -1 for void,
-so a haptic unit sitting on the skin (z < 0) is painted as rectangles onto the same grid. Elements
+The domain is a tensor grid of cell lines in r (radius, from the axis outwards) and z (depth,
+positive into the tissue, z = 0 at the skin surface). Every cell carries a material index, or -1
+for void, so a haptic unit sitting on the skin (z < 0) is painted as rectangles onto the same
+grid. Elements
 are Lagrange quadrilaterals of order p (1: 4 nodes, 2: 9 nodes) whose nodes sit on the refined
 tensor grid, so conformity across layer interfaces is by construction.
 
@@ -11,6 +12,7 @@ All lengths are in metres.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +32,7 @@ def graded_lines(breaks: NDArray, size_at: callable, min_per_segment: int = 1) -
     """
     breaks = np.unique(np.asarray(breaks, dtype=float))
     lines = [breaks[:1]]
-    for a, b in zip(breaks[:-1], breaks[1:], strict=True):
+    for a, b in itertools.pairwise(breaks):
         x = np.linspace(a, b, 257)
         density = 1.0 / size_at(x)
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1]) * np.diff(x))])
@@ -134,7 +136,7 @@ def build_mesh(r_lines: NDArray, z_lines: NDArray, cell_material: NDArray, order
 
     jz, ir = np.nonzero(cell_material >= 0)
     local = np.arange(order + 1)
-    # global tensor index of local node (i, j) in cell (ir, jz): (order*jz + j) * n_r_nodes + order*ir + i
+    # tensor index of local node (i, j) of cell (ir, jz): (p jz + j) * n_r_nodes + p ir + i
     gi = order * ir[:, None, None] + local[None, None, :]
     gj = order * jz[:, None, None] + local[None, :, None]
     tensor_ids = (gj * n_r_nodes + gi).reshape(ir.size, -1)

@@ -14,12 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from . import loads, results
+from . import SOLVER_VERSION, loads, results
 from .domain import Domain, MeshSpec, Solid, layered_domain
 from .scene import Scene
 from .solve import OperatorLog, has_hysteresis, solve_mode
 
-from . import SOLVER_VERSION
 #: Distances from the edge (mm) of the profile every result carries.
 PROFILE_DISTANCES_MM = np.arange(0.0, 20.0 + 1e-9, 1.0)
 
@@ -86,6 +85,11 @@ class SimulationResult:
             "meta": dict(self.meta),
         }
         return out
+
+    def surface_curve(self) -> tuple[NDArray, NDArray]:
+        """Radii (mm) of all surface nodes within the model and their amplitudes (n, 3) in m."""
+        nodes = self.domain.surface_nodes()
+        return self.domain.mesh.nodes[nodes, 0] * 1e3, self.nodal[nodes]
 
     def summary(self) -> str:
         """A short human-readable report."""
@@ -173,9 +177,9 @@ def simulate(scene: Scene) -> SimulationResult:
         "effects": effects, "skipped": skipped, "operators": log.built, "wall_s": wall,
         "time_convention": "exp(+i omega t)", "solver_version": SOLVER_VERSION,
     }
-    return SimulationResult(scene, r_probe * 1e3, vals[:n], None if edge_m is None else edge_m * 1e3,
-                            vals[n], vals[n + 1], (prof_m - (edge_m or 0.0)) * 1e3, vals[n + 2:],
-                            meta, domain, nodal)
+    edge_mm = None if edge_m is None else edge_m * 1e3
+    return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
+                            (prof_m - (edge_m or 0.0)) * 1e3, vals[n + 2:], meta, domain, nodal)
 
 
 def _profile_radii(edge: float, radius: float) -> NDArray:
