@@ -128,10 +128,15 @@ def build_dofmap(mesh: Mesh, mode: int,
                   int(primary.sum()))
 
 
-def assemble_matrix(dm: DofMap, Ke: NDArray) -> sp.csr_matrix:
-    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix."""
-    rows = dm.master[dm.element_dofs]
-    coefs = dm.coef[dm.element_dofs]
+def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
+                    ) -> sp.csr_matrix:
+    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix.
+
+    ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
+    pass their own full dof indices."""
+    edofs = dm.element_dofs if element_dofs is None else element_dofs
+    rows = dm.master[edofs]
+    coefs = dm.coef[edofs]
     R = np.broadcast_to(rows[:, :, None], Ke.shape)
     C = np.broadcast_to(rows[:, None, :], Ke.shape)
     keep = (R >= 0) & (C >= 0)

@@ -129,7 +129,7 @@ class Domain:
 def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: str, base: str,
                    spec: MeshSpec, analysis: str, omega: float = 0.0,
                    r_breaks: Sequence[float] = (), blocks: Sequence[Block] = (),
-                   damping_rate: float | None = None) -> Domain:
+                   damping_rate: float | None = None, z_breaks: Sequence[float] = ()) -> Domain:
     """Mesh layered tissue (top to bottom: (thickness m, Solid)) with the treatments asked for.
 
     Args:
@@ -140,6 +140,7 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
         analysis: "static" | "harmonic" | "transient" (decides the absorber).
         omega: angular frequency (rad/s) for harmonic/transient absorber tuning.
         r_breaks: radii (m) that must be cell lines (load edges, unit radii).
+        z_breaks: depths (m, negative) above the skin that must be cell lines (rotor plane).
         blocks: rectangles above the skin (z < 0) or replacing tissue.
         damping_rate: peak rate (1/s) of the transient damping layer (default 3 omega).
     """
@@ -184,7 +185,8 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
         z_lines = np.concatenate([z_lines, z_lay.lines])
     if blocks:
         z_top = min(b.z0 for b in blocks)
-        z_above = sorted({b.z0 for b in blocks} | {b.z1 for b in blocks if b.z1 < 0} | {z_top})
+        z_above = sorted({b.z0 for b in blocks} | {b.z1 for b in blocks if b.z1 < 0} | {z_top}
+                         | {z for z in z_breaks if z_top <= z < 0})
         above = graded_lines(np.array([*z_above, 0.0]), lambda x: np.full_like(x, spec.near_size),
                              min_cells)
         z_lines = np.concatenate([above[:-1], z_lines])

@@ -16,16 +16,16 @@ from .domain import Domain
 from .elements import lagrange_1d
 
 
-def surface_interpolator(domain: Domain, radii: NDArray, z: float = 0.0):
-    """Return f(nodal (n_nodes, 3)) -> (len(radii), 3) values on the face at depth z.
-
-    Uses the element shape functions along the top edge of the tissue cells just below z, so
-    the interpolation has the accuracy of the discretisation.
-    """
+def surface_stencil(domain: Domain, radii: NDArray, z: float = 0.0,
+                    side: str = "below") -> tuple[NDArray, NDArray]:
+    """Nodes (k, p+1) and weights (k, p+1) that interpolate nodal values at ``radii`` (m) on the
+    face at depth z, with the shape functions of the edges of the cells just below (or above)
+    it: the accuracy of the discretisation."""
     m = domain.mesh
     p = m.order
     radii = np.asarray(radii, dtype=float)
-    row = np.flatnonzero(np.abs(m.cell_z0 - z) < 1e-12)
+    edge_z = m.cell_z0 if side == "below" else m.cell_z0 + m.cell_hz
+    row = np.flatnonzero(np.abs(edge_z - z) < 1e-12 + 1e-9 * abs(z))
     row = row[np.argsort(m.cell_r0[row])]
     r0, hr = m.cell_r0[row], m.cell_hr[row]
     k = np.clip(np.searchsorted(r0, radii, side="right") - 1, 0, row.size - 1)
@@ -33,12 +33,20 @@ def surface_interpolator(domain: Domain, radii: NDArray, z: float = 0.0):
     if np.any(np.abs(xi) > 1 + 1e-9):
         raise ValueError("a probe radius lies outside the meshed surface")
     L, _ = lagrange_1d(p, xi)
-    nodes = m.elements[row[k]][:, : p + 1]
+    first = 0 if side == "below" else p * (p + 1)
+    return m.elements[row[k]][:, first: first + p + 1], L
 
-    def interpolate(nodal: NDArray) -> NDArray:
-        return np.einsum("ki,kic->kc", L, nodal[nodes])
 
-    return interpolate
+def interpolate(stencil: tuple[NDArray, NDArray], nodal: NDArray) -> NDArray:
+    """Values (k, 3) at the stencil's points from nodal (n_nodes, 3) amplitudes."""
+    nodes, weights = stencil
+    return np.einsum("ki,kic->kc", weights, nodal[nodes])
+
+
+def surface_interpolator(domain: Domain, radii: NDArray, z: float = 0.0):
+    """Return f(nodal (n_nodes, 3)) -> (len(radii), 3) values at ``radii`` on the face at z."""
+    stencil = surface_stencil(domain, radii, z)
+    return lambda nodal: interpolate(stencil, nodal)
 
 
 def magnitude(U: NDArray) -> NDArray:

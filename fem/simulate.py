@@ -14,13 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from . import SOLVER_VERSION, loads, results
-from .domain import Domain, MeshSpec, Solid, layered_domain
+from . import SOLVER_VERSION, results, time_domain
+from .domain import Domain
+from .problem import build_problem
 from .scene import Scene
-from .solve import OperatorLog, has_hysteresis, solve_mode
-
-#: Distances from the edge (mm) of the profile every result carries.
-PROFILE_DISTANCES_MM = np.arange(0.0, 20.0 + 1e-9, 1.0)
+from .solve import OperatorLog, solve_mode
 
 
 @dataclass(frozen=True)
@@ -48,7 +46,9 @@ class SimulationResult:
     profile: NDArray
     meta: dict
     domain: Domain = field(repr=False)
-    nodal: NDArray = field(repr=False)
+    nodal: NDArray | None = field(repr=False)
+    histories: time_domain.Histories | None = field(default=None, repr=False)
+    extras: dict = field(default_factory=dict)
 
     @property
     def center_amplitude_um(self) -> float | None:
@@ -84,10 +84,24 @@ class SimulationResult:
             },
             "meta": dict(self.meta),
         }
+        out.update(self.extras)
+        if self.histories is not None:
+            h = self.histories
+            out["histories"] = {"t_s": h.t.tolist(), "points": [
+                {"r_mm": float(r * 1e3),
+                 **{f"{c}_um": (h.u[:, i, k] * 1e6).tolist()
+                    for k, c in enumerate(("ur", "uz", "ut"))},
+                 "magnitude_um": (np.linalg.norm(h.u[:, i], axis=-1) * 1e6).tolist()}
+                for i, r in enumerate(h.radii[: self.r_mm.size])]}
         return out
 
     def surface_curve(self) -> tuple[NDArray, NDArray]:
-        """Radii (mm) of all surface nodes within the model and their amplitudes (n, 3) in m."""
+        """Radii (mm) and amplitudes (n, 3) in m along the skin surface: every surface node of a
+        steady solve, the probes and profile of a transient (peak amplitudes)."""
+        if self.nodal is None:
+            r = np.concatenate([self.r_mm, self.profile_mm + (self.edge_mm or 0.0)])
+            order = np.argsort(r)
+            return r[order], np.concatenate([self.U, self.profile])[order]
         nodes = self.domain.surface_nodes()
         return self.domain.mesh.nodes[nodes, 0] * 1e3, self.nodal[nodes]
 
@@ -97,7 +111,7 @@ class SimulationResult:
         lines = [
             f"hapticrom {SOLVER_VERSION}: {self.scene.analysis.kind} analysis"
             + (f" at {self.scene.analysis.frequency_hz:g} Hz"
-               if self.scene.analysis.kind != "static" else ""),
+               if self.scene.analysis.kind == "harmonic" else ""),
             f"  elements {m['elements']}, dofs {m['dofs']}, order {self.scene.mesh.order}, "
             f"Fourier modes {m['modes']}, wall time {m['wall_s'] * 1e3:.1f} ms",
             f"  included: {', '.join(m['effects']) or 'none'}",
@@ -113,75 +127,109 @@ class SimulationResult:
             lines.append(f"  centre {self.center_amplitude_um:.4g} um, edge "
                          f"({self.edge_mm:g} mm) {self.edge_amplitude_um:.4g} um, normalized "
                          f"edge {self.normalized_edge:.3f}")
+        if self.histories is not None:
+            lines.append(f"  transient: {self.histories.t.size} recorded steps; amplitudes are "
+                         "peak values over the run")
+        for key, value in self.extras.items():
+            lines.append(f"  {key}: {value}")
+        lines += [f"  warning: {w}" for w in m.get("warnings", [])]
         return "\n".join(lines)
-
-
-def tissue_layers(scene: Scene) -> list[tuple[float, Solid]]:
-    """The scene's layers as (thickness m, Solid)."""
-    return [(ly.thickness_m, Solid(ly.E_Pa, ly.nu, ly.density_kg_m3, ly.loss_factor, ly.name))
-            for ly in scene.tissue.layers]
-
-
-def mesh_spec(scene: Scene) -> MeshSpec:
-    m = scene.mesh
-    return MeshSpec(m.near_size_mm * 1e-3, m.near_radius_mm * 1e-3, m.far_size_mm * 1e-3,
-                    m.order)
-
-
-def build_domain(scene: Scene) -> Domain:
-    """Discretise the scene's tissue with the absorbers its analysis needs."""
-    a = scene.analysis
-    omega = 2 * np.pi * a.frequency_hz if a.kind != "static" else 0.0
-    breaks = [scene.load.radius_m] if scene.load.kind == "pressure_patch" else []
-    return layered_domain(tissue_layers(scene), scene.tissue.radius_m, scene.tissue.side,
-                          scene.tissue.base, mesh_spec(scene), a.kind, omega, breaks)
-
-
-def load_vector(scene: Scene, domain: Domain, mode: int) -> NDArray:
-    """Full nodal load (N) of the scene's load in Fourier mode ``mode``."""
-    ld = scene.load
-    if ld.kind == "point_force":
-        return loads.axis_point_force(domain, mode, ld.force_N)
-    t = ld.amplitude_Pa
-    comps = (0.0, t, 0.0) if mode == 0 else (t, 0.0, -t)
-    return loads.surface_traction(domain, mode, ld.radius_m, comps)
 
 
 def simulate(scene: Scene) -> SimulationResult:
     """Solve a scene and sample the skin surface."""
     t0 = time.perf_counter()
-    domain = build_domain(scene)
-    mode = 0 if scene.load.direction == "normal" else 1
-    omega = (2 * np.pi * scene.analysis.frequency_hz
-             if scene.analysis.kind == "harmonic" else 0.0)
+    problem = build_problem(scene)
     log = OperatorLog()
-    sol = solve_mode(domain, mode, load_vector(scene, domain, mode), omega, log)
-    nodal = sol.nodal()
-    wall = time.perf_counter() - t0
-
-    effects = list(domain.effects)
-    skipped = list(domain.skipped)
-    (effects if omega > 0 else skipped).append("inertia")
-    (effects if has_hysteresis(domain) else skipped).append("hysteretic damping")
-    skipped.append(f"Fourier mode {1 - mode}")
-
-    edge_m = scene.load.radius_m if scene.load.kind == "pressure_patch" else None
+    edge = problem.edge
     r_probe = np.asarray(scene.output.radii_m)
-    prof_m = _profile_radii(edge_m or 0.0, scene.tissue.radius_m)
-    sample = results.surface_interpolator(
-        domain, np.concatenate([r_probe, [0.0, edge_m or 0.0], prof_m]))
-    vals = sample(nodal)
-    n = r_probe.size
+    prof_m = _profile_radii(scene, edge or 0.0)
+    radii = np.concatenate([r_probe, [0.0, edge or 0.0], prof_m])
+    stencil = _stencil(problem, radii, r_probe.size)
+    histories, extras = None, {}
+    if scene.analysis.kind == "transient":
+        histories = time_domain.run(scene, problem, stencil, radii, log)
+        vals = histories.amplitude().astype(complex)
+        nodal, n_dofs = None, histories.n_dofs
+    else:
+        sol = solve_mode(problem.domain, problem.mode, problem.load, problem.omega, log,
+                         extra=problem.extra)
+        nodal, n_dofs = sol.nodal(), sol.n_dofs
+        vals = results.interpolate(stencil, nodal)
+        if problem.effects["preload"]:
+            extras["preload"] = pin_preload(problem, sol)
+    wall = time.perf_counter() - t0
+    included, skipped = problem.effect_lists()
     meta = {
-        "dofs": sol.n_dofs, "elements": domain.mesh.n_elements, "modes": [mode],
-        "effects": effects, "skipped": skipped, "operators": log.built, "wall_s": wall,
+        "dofs": n_dofs, "elements": problem.domain.mesh.n_elements, "modes": [problem.mode],
+        "effects": included, "skipped": skipped, "operators": log.built, "wall_s": wall,
         "time_convention": "exp(+i omega t)", "solver_version": SOLVER_VERSION,
     }
-    edge_mm = None if edge_m is None else edge_m * 1e3
+    warning = resolution_warning(scene, problem)
+    if warning:
+        meta["warnings"] = [warning]
+    n = r_probe.size
+    edge_mm = None if edge is None else edge * 1e3
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
-                            (prof_m - (edge_m or 0.0)) * 1e3, vals[n + 2:], meta, domain, nodal)
+                            (prof_m - (edge or 0.0)) * 1e3, vals[n + 2:], meta,
+                            problem.domain, nodal, histories, extras)
 
 
-def _profile_radii(edge: float, radius: float) -> NDArray:
-    r = edge + PROFILE_DISTANCES_MM * 1e-3
-    return r[r <= radius * (1 + 1e-12)]
+def _stencil(problem, radii: NDArray, centre_index: int) -> tuple[NDArray, NDArray]:
+    """Interpolation stencil of the skin surface at ``radii``, except the centre point
+    (index ``centre_index``), which sits on the unit's skin-side face (see ``fem.unit``)."""
+    nodes, weights = results.surface_stencil(problem.domain, radii)
+    lay = problem.layout
+    if lay is not None and lay.contact_z != 0.0:
+        c_nodes, c_weights = results.surface_stencil(problem.domain, [0.0], lay.contact_z,
+                                                     side="above")
+        nodes, weights = nodes.copy(), weights.copy()
+        nodes[centre_index], weights[centre_index] = c_nodes[0], c_weights[0]
+    return nodes, weights
+
+
+def _profile_radii(scene: Scene, edge: float) -> NDArray:
+    out = scene.output
+    d = np.arange(0.0, out.profile_length_mm + 1e-9, out.profile_step_mm) * 1e-3
+    r = edge + d
+    return r[r <= scene.tissue.radius_m * (1 + 1e-12)]
+
+
+def resolution_warning(scene: Scene, problem) -> str | None:
+    """A message when the mesh has fewer than the recommended elements per shear wavelength in
+    some tissue layer (DESIGN.md sec. 2: 2 mm linear elements are only 7 per fat wavelength)."""
+    if scene.analysis.kind == "static":
+        return None
+    f = problem.omega / (2 * np.pi) if problem.omega else drive_frequency_hz(scene)
+    need = 10.0 / scene.mesh.order  # elements per wavelength: 10 linear, 5 quadratic
+    worst = None
+    for ly in scene.tissue.layers:
+        c_s = np.sqrt(ly.E_Pa / (2 * (1 + ly.nu)) / ly.density_kg_m3)
+        per_wave = c_s / f / (scene.mesh.far_size_mm * 1e-3)
+        if per_wave < need and (worst is None or per_wave < worst[1]):
+            worst = (ly.name, per_wave, c_s / f)
+    if worst is None:
+        return None
+    name, per_wave, lam = worst
+    return (f"under-resolved: {per_wave:.1f} elements per shear wavelength ({lam * 1e3:.1f} mm) "
+            f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g}; "
+            f"use far_size_mm <= {lam * 1e3 / need:.2f} or mesh.order = 2 for < 1 % error")
+
+
+def drive_frequency_hz(scene: Scene) -> float:
+    if scene.analysis.kind == "transient" and scene.load.kind == "unit":
+        return scene.unit.motor.rated_frequency_hz
+    return scene.analysis.frequency_hz
+
+
+def pin_preload(problem, sol) -> dict:
+    """Check the linear pogo model: contact holds while the dynamic force of the most loaded
+    pin, k |compression amplitude|, stays below its preload k x travel."""
+    from .unit import pin_compression
+
+    pogo = problem.unit.pogo
+    dofs, b = pin_compression(problem.domain, problem.mode, problem.layout.pins)
+    force = pogo.stiffness * float(np.abs(b @ sol.u_full[dofs]))
+    preload = pogo.stiffness * pogo.travel
+    return {"preload_per_pin_N": preload, "dynamic_pin_force_N": force,
+            "contact_maintained": force < preload}

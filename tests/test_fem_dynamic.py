@@ -5,6 +5,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from fem_cases import half_space_solid
 
 from fem import analytic
 from fem.assembly import UR, UZ
@@ -13,7 +14,6 @@ from fem.loads import axis_point_force
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
 from fem.simulate import simulate
 from fem.solve import natural_modes, solve_mode
-from fem_cases import half_space_solid
 
 EXAMPLE = "examples/forearm.toml"
 

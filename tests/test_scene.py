@@ -8,13 +8,16 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fem.materials import MATERIALS
 from fem.scene import (
+    EFFECT_NAMES,
     Analysis,
+    Effects,
     Layer,
     Load,
     MeshSettings,
@@ -70,6 +73,12 @@ def test_defaults_are_the_paper_forearm() -> None:
     assert s.analysis == Analysis("static", 120.0)
     assert s.mesh == MeshSettings(0.5, 8.0, 2.0, 2)
     assert s.output == Output((0.0, 2.0, 4.0, 8.0, 12.0, 16.0, 20.0))
+    assert (s.analysis.time_step_ms, s.analysis.duration_ms, s.analysis.rho_inf,
+            s.analysis.voltage_schedule) == (0.05, 200.0, 0.9, ((0.0, 3.3),))
+    assert (s.output.profile_step_mm, s.output.profile_length_mm, s.output.history_every) == (
+        1.0, 20.0, 1)
+    assert s.unit is None and s.effects == Effects()
+    assert all(getattr(s.effects, name) is None for name in EFFECT_NAMES)  # all auto
     # A [tissue] table without layers still gets the forearm.
     assert scene_from_dict({"tissue": {"radius_mm": 60.0}}).tissue.layers == s.tissue.layers
 
@@ -127,6 +136,53 @@ def test_to_dict_is_toml_shaped_and_complete() -> None:
                          "order": 2}
 
 
+def test_transient_analysis_round_trip() -> None:
+    d = {"analysis": {"kind": "transient", "time_step_ms": 0.1, "duration_ms": 50,
+                      "rho_inf": 0, "voltage_schedule": [[0, 3], [10.5, -3.3], [20, 0]]},
+         "output": {"history_every": 7, "profile_step_mm": 4, "profile_length_mm": 20}}
+    s = scene_from_dict(d)
+    a = s.analysis
+    assert a.voltage_schedule == ((0.0, 3.0), (10.5, -3.3), (20.0, 0.0))
+    assert all(isinstance(x, float) for pair in a.voltage_schedule for x in pair)
+    assert np.allclose(a.voltage_schedule_s, [[0.0, 3.0], [0.0105, -3.3], [0.02, 0.0]])
+    assert (a.time_step_s, a.duration_s) == pytest.approx((1e-4, 0.05))
+    assert s.output.history_every == 7 and isinstance(s.output.history_every, int)
+    # paper: amplitude every 4 mm from 0 to 20 mm from the unit edge
+    assert s.output.profile_distances_mm == (0.0, 4.0, 8.0, 12.0, 16.0, 20.0)
+    assert Output(profile_step_mm=3.0, profile_length_mm=10.0).profile_distances_mm == (
+        0.0, 3.0, 6.0, 9.0)
+    assert len(Output(profile_step_mm=0.1, profile_length_mm=1.0).profile_distances_mm) == 11
+    assert "voltage_schedule = [[0.0, 3.0], [10.5, -3.3], [20.0, 0.0]]" in dump_scene_toml(s)
+    _round_trips(s)
+    # a directly built analysis with lists is stored hashable, and validated
+    direct = Scene(s.tissue, analysis=Analysis("transient", voltage_schedule=[[0, 1], [5, 2]]))
+    assert direct.analysis.voltage_schedule == ((0, 1), (5, 2))
+    assert scene_hash(direct) == scene_hash(scene_from_dict(
+        {"analysis": {"kind": "transient", "voltage_schedule": [[0.0, 1.0], [5.0, 2.0]]}}))
+    with pytest.raises(SceneError) as info:
+        Scene(s.tissue, analysis=Analysis(voltage_schedule=((1.0, 3.3),)))
+    assert info.value.field == "analysis.voltage_schedule[0][0]"
+
+
+def test_effects_round_trip_and_hash() -> None:
+    auto = scene_from_dict({"effects": {}})
+    assert auto == scene_from_dict({}) and "effects" not in scene_to_dict(auto)
+    s = scene_from_dict({"effects": {"inertia": False, "rocking": True,
+                                     "spin_up": np.bool_(True)}})
+    assert s.effects == Effects(inertia=False, rocking=True, spin_up=True)
+    assert scene_to_dict(s)["effects"] == {"inertia": False, "rocking": True, "spin_up": True}
+    assert "[effects]\ninertia = false\nrocking = true" in dump_scene_toml(s)
+    _round_trips(s)
+    hashes = {scene_hash(scene_from_dict({"effects": e}))
+              for e in ({}, {"pogo": True}, {"pogo": False}, {"preload": True})}
+    assert len(hashes) == 4  # auto, on and off are three different scenes
+    direct = Scene(s.tissue, effects=Effects(inertia=np.bool_(False), rocking=True,
+                                             spin_up=True))
+    assert scene_hash(direct) == scene_hash(s)  # numpy scalars hash as Python ones
+    assert s.effects.resolve("inertia", True) is False
+    assert s.effects.resolve("pogo", True) is True and s.effects.resolve("pogo", False) is False
+
+
 def test_hash() -> None:
     a = scene_from_dict({})
     h = scene_hash(a)
@@ -169,6 +225,21 @@ layers = st.fixed_dictionaries(
 )
 
 
+schedules = st.lists(
+    st.tuples(st.floats(0.001, 1000, allow_nan=False), st.floats(-50, 50, allow_nan=False)),
+    max_size=6,
+).map(lambda steps: [[0, 3.3]] + [[sum(dt for dt, _ in steps[: i + 1]), v]
+                                  for i, (_, v) in enumerate(steps)])
+
+
+@settings(max_examples=100, deadline=None)
+@given(schedules)
+def test_random_schedules_round_trip(schedule: list[list[float]]) -> None:
+    s = scene_from_dict({"analysis": {"kind": "transient", "voltage_schedule": schedule}})
+    assert s.analysis.voltage_schedule == tuple((float(t), float(v)) for t, v in schedule)
+    _round_trips(s)
+
+
 @settings(max_examples=150, deadline=None)
 @given(st.lists(layers, min_size=1, max_size=6), st.lists(_num(0, 50), min_size=1, max_size=5))
 def test_random_valid_layers_round_trip(layer_dicts: list[dict], radii: list[float]) -> None:
@@ -208,8 +279,42 @@ ERRORS = [
     (_scene(tissue={"base": "free"}), "tissue.base", "'fixed', 'absorbing'"),
     (_scene(load={"kind": "ring"}), "load.kind", "'pressure_patch', 'point_force'"),
     (_scene(load={"direction": "up"}), "load.direction", "'normal', 'tangential'"),
-    (_scene(analysis={"kind": "transient"}), "analysis.kind", "'static', 'harmonic'"),
+    (_scene(analysis={"kind": "modal"}), "analysis.kind", "'static', 'harmonic', 'transient'"),
     (_scene(mesh={"order": 3}), "mesh.order", "choose one of 1, 2"),
+    # effects: booleans only, unknown keys with a suggestion
+    (_scene(effects={"inertai": True}), "effects.inertai", "did you mean 'inertia'"),
+    (_scene(effects={"spinup": True}), "effects.spinup", "did you mean 'spin_up'"),
+    (_scene(effects={"pogo": "auto"}), "effects.pogo", "expected true or false"),
+    (_scene(effects={"rocking": 1}), "effects.rocking", "leave the key out for auto"),
+    (_scene(effects=[]), "effects", "must be a table"),
+    (_scene(output={"history_every": 2.0}), "output.history_every", "expected an integer"),
+    (_scene(analysis={"time_step": 0.1}), "analysis.time_step", "did you mean 'time_step_ms'"),
+    # voltage schedule: [t_ms, volts] pairs from t = 0, strictly increasing, |volts| <= 50
+    (_scene(analysis={"voltage_schedule": [[5.0, 3.3]]}), "analysis.voltage_schedule[0][0]",
+     "must start at t_ms = 0"),
+    (_scene(analysis={"voltage_schedule": [[0, 3.3], [100, 0], [50, 1]]}),
+     "analysis.voltage_schedule[2][0]",
+     "increase strictly, allowed t_ms > analysis.voltage_schedule[1][0] (= 100)"),
+    (_scene(analysis={"voltage_schedule": [[0, 3.3], [0, 0]]}),
+     "analysis.voltage_schedule[1][0]", "allowed t_ms > analysis.voltage_schedule[0][0] (= 0)"),
+    (_scene(analysis={"voltage_schedule": [[-1, 3.3]]}), "analysis.voltage_schedule[0][0]",
+     "0 <= t_ms <= 1e5"),
+    (_scene(analysis={"voltage_schedule": [[0, 3.3], [math.inf, 0]]}),
+     "analysis.voltage_schedule[1][0]", "0 <= t_ms <= 1e5"),
+    (_scene(analysis={"voltage_schedule": [[0, 3.3], [1, -50.5]]}),
+     "analysis.voltage_schedule[1][1]", "-50 <= volts <= 50"),
+    (_scene(analysis={"voltage_schedule": [[0, math.nan]]}), "analysis.voltage_schedule[0][1]",
+     "-50 <= volts <= 50"),
+    (_scene(analysis={"voltage_schedule": []}), "analysis.voltage_schedule",
+     "non-empty list of [t_ms, volts] pairs"),
+    (_scene(analysis={"voltage_schedule": 3.3}), "analysis.voltage_schedule",
+     "non-empty list of [t_ms, volts] pairs"),
+    (_scene(analysis={"voltage_schedule": [[0, 1, 2]]}), "analysis.voltage_schedule[0]",
+     "[t_ms, volts] pair"),
+    (_scene(analysis={"voltage_schedule": [0, 3.3]}), "analysis.voltage_schedule[0]",
+     "[t_ms, volts] pair"),
+    (_scene(analysis={"voltage_schedule": [[0, "3.3"]]}), "analysis.voltage_schedule[0][1]",
+     "expected a number"),
     # missing layer values, unknown material, layer count
     (_scene(tissue={"layer": [{"thickness_mm": 1.0, "E_kPa": 1.0, "nu": 0.3}]}),
      "tissue.layer[0].density_kg_m3", "0 < density_kg_m3 <= 1e5"),
@@ -254,6 +359,16 @@ RANGES = [
     ("mesh.near_radius_mm", [0, 50.1], [0.1, 50], "0 < near_radius_mm <= tissue.radius_mm", {}),
     ("output.radii_mm", [[-1.0], [0.0, 50.5], []], [[50.0], [0, 0]],
      "0 <= radii_mm <= tissue.radius_mm (= 50)", {}),
+    ("analysis.time_step_ms", [0, -1, 100.5], [1e-4, 100], "0 < time_step_ms <= 100", {}),
+    ("analysis.duration_ms", [0, 0.04, 1e5 + 1], [0.05, 1e5],
+     "analysis.time_step_ms (= 0.05) <= duration_ms <= 1e5", {}),
+    ("analysis.duration_ms", [0.99], [1.0], "analysis.time_step_ms (= 1) <= duration_ms",
+     {"analysis": {"time_step_ms": 1.0}}),
+    ("analysis.rho_inf", [-0.01, 1.01, math.nan], [0, 1, 0.5], "0 <= rho_inf <= 1", {}),
+    ("output.profile_step_mm", [0, 100.5], [0.01, 100], "0 < profile_step_mm <= 100", {}),
+    ("output.profile_length_mm", [0, -2, 1000.5], [0.01, 1000], "0 < profile_length_mm <= 1000",
+     {}),
+    ("output.history_every", [0, -1, 10**6 + 1], [1, 10**6], "1 <= history_every <= 1e6", {}),
 ]
 
 

@@ -1,0 +1,187 @@
+"""From a validated scene to a discretised problem: which Fourier mode, which operators, which
+load, and which physical effects are in or out.
+
+Effects are switched on by what the scene contains ("auto") and can be switched off in the
+scene's ``[effects]`` table; asking for an effect the scene cannot have is an error. Nothing an
+effect needs is built when it is off: no mass without inertia, no complex moduli without
+hysteretic damping, no ring cells without encapsulation, no pin operator without pogo pins.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import loads, unit
+from .domain import Domain, MeshSpec, Solid, layered_domain
+from .scene import Scene, SceneError
+
+EFFECTS = ("inertia", "hysteretic_damping", "encapsulation", "pogo", "unit_mass", "rocking",
+           "spin_up", "preload")
+
+UNIT_KINDS = ("unit", "normal_actuator")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A discretised scene.
+
+    Attributes:
+        domain: mesh, materials, absorbers, constraints.
+        mode: the one Fourier mode the load excites.
+        omega: drive angular frequency (rad/s) of a steady solve; 0 for static or quasi-static.
+        load: full nodal load vector (N) at the drive amplitude.
+        extra: (name, dofs, matrices) operators beyond the continuum (pin springs).
+        edge: radius of the load footprint's edge (m), None for a point force.
+        effects: resolved effect switches.
+        unit: the unit in SI, or None; layout: where its parts are.
+    """
+
+    domain: Domain
+    mode: int
+    omega: float
+    load: NDArray
+    extra: tuple
+    edge: float | None
+    effects: dict[str, bool]
+    unit: unit.UnitSpec | None = None
+    layout: unit.UnitLayout | None = None
+
+    def effect_lists(self) -> tuple[list[str], list[str]]:
+        """(included, skipped) effect names for the summary, with the domain's own."""
+        inc = [*self.domain.effects, *(k.replace("_", " ") for k, v in self.effects.items() if v)]
+        skip = [*self.domain.skipped,
+                *(k.replace("_", " ") for k, v in self.effects.items() if not v),
+                f"Fourier mode {1 - self.mode}"]
+        return inc, skip
+
+
+def _solid(E_kPa: float, nu: float, density: float, loss: float, name: str,
+           hysteretic: bool) -> Solid:
+    return Solid(E_kPa * 1e3, nu, density, loss if hysteretic else 0.0, name)
+
+
+def _has_loss(scene: Scene) -> bool:
+    rings = scene.unit.encapsulation if scene.unit is not None else ()
+    return any(x.loss_factor > 0 for x in (*scene.tissue.layers, *rings))
+
+
+def resolve_effects(scene: Scene) -> dict[str, bool]:
+    """Effect switches: the scene's explicit choices over what it contains."""
+    kind, u = scene.load.kind, scene.unit
+    erm = kind == "unit"
+    available = {
+        "inertia": (scene.analysis.kind != "static", "analysis.kind = 'harmonic' or 'transient'"),
+        "hysteretic_damping": (_has_loss(scene), "a layer or ring with loss_factor > 0"),
+        "encapsulation": (u is not None and len(u.encapsulation) > 0, "unit.encapsulation rings"),
+        "pogo": (u is not None and u.attachment == "pogo", "unit.attachment = 'pogo'"),
+        "unit_mass": (u is not None, "a [unit]"),
+        "rocking": (erm, "load.kind = 'unit' (an ERM)"),
+        "spin_up": (erm and scene.analysis.kind == "transient",
+                    "load.kind = 'unit' with analysis.kind = 'transient'"),
+        "preload": (u is not None and u.attachment == "pogo", "unit.attachment = 'pogo'"),
+    }
+    chosen = {}
+    for name, (possible, needs) in available.items():
+        asked = getattr(scene.effects, name)
+        if asked and not possible:
+            raise SceneError(f"effects.{name}", f"effects.{name} = true needs {needs}")
+        chosen[name] = possible if asked is None else bool(asked)
+    chosen["preload"] = bool(scene.effects.preload)  # an extra static solve: only on request
+    if scene.analysis.kind == "transient" and not chosen["inertia"]:
+        raise SceneError("effects.inertia", "a transient analysis needs inertia = true")
+    if u is not None and u.attachment == "pogo" and not chosen["pogo"]:
+        raise SceneError("effects.pogo", "effects.pogo = false conflicts with unit.attachment = "
+                         "'pogo'; set attachment = 'glued' to drop the pins")
+    return chosen
+
+
+def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
+    """The scene's unit in SI units."""
+    u = scene.unit
+    m, b, p = u.motor, u.board, u.pogo
+    rings = tuple(_solid(r.E_kPa, r.nu, r.density_kg_m3, r.loss_factor, r.name, hysteretic)
+                  for r in u.encapsulation)
+    motor = unit.MotorSpec(0.5e-3 * m.diameter_mm, 1e-3 * m.height_mm, 1e-3 * m.mass_g,
+                           m.unbalance_kg_m, 1e-3 * m.rotor_height_mm, m.E_kPa * 1e3, m.nu)
+    pogo = unit.PogoSpec(p.count, 1e-3 * p.radius_mm, p.stiffness_N_m, 1e-3 * p.length_mm,
+                         1e-3 * p.travel_mm, 1e-3 * p.tip_diameter_mm)
+    board = _solid(b.E_kPa, b.nu, b.density_kg_m3, 0.0, "pcb", hysteretic)
+    return unit.UnitSpec(motor, u.orientation, u.attachment, 1e-3 * b.thickness_mm,
+                         0.5e-3 * b.diameter_mm, board, rings, 1e-3 * u.ring_thickness_mm, pogo)
+
+
+def mesh_spec(scene: Scene) -> MeshSpec:
+    m = scene.mesh
+    return MeshSpec(m.near_size_mm * 1e-3, m.near_radius_mm * 1e-3, m.far_size_mm * 1e-3,
+                    m.order)
+
+
+def drive_omega(scene: Scene) -> float:
+    """Angular frequency (rad/s) the absorbers are tuned for: the analysis frequency, or for a
+    transient ERM the motor's rated speed."""
+    if scene.analysis.kind == "transient" and scene.load.kind == "unit":
+        return 2 * np.pi * scene.unit.motor.rated_frequency_hz
+    return 2 * np.pi * scene.analysis.frequency_hz
+
+
+def build_problem(scene: Scene) -> Problem:
+    """Discretise a scene with only the effects it asks for."""
+    effects = resolve_effects(scene)
+    hyst = effects["hysteretic_damping"]
+    layers = [(ly.thickness_m, _solid(ly.E_kPa, ly.nu, ly.density_kg_m3, ly.loss_factor,
+                                      ly.name, hyst)) for ly in scene.tissue.layers]
+    dynamic = effects["inertia"]
+    analysis = scene.analysis.kind if dynamic else "static"
+    omega = drive_omega(scene) if dynamic else 0.0
+    spec, lay = None, None
+    if scene.load.kind in UNIT_KINDS:
+        spec = unit_spec(scene, hyst)
+        lay = unit.layout(spec, effects["encapsulation"], effects["unit_mass"], effects["rocking"])
+        domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
+                                scene.tissue.base, mesh_spec(scene), analysis,
+                                omega or drive_omega(scene), lay.r_breaks, lay.blocks,
+                                z_breaks=lay.z_breaks)
+    else:
+        breaks = [scene.load.radius_m] if scene.load.kind == "pressure_patch" else []
+        domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
+                                scene.tissue.base, mesh_spec(scene), analysis, omega, breaks)
+    mode = _mode(scene)
+    extra = ()
+    if lay is not None and lay.pins is not None:
+        extra = (("pogo pins", *unit.pin_spring(domain, mode, lay.pins)),)
+    steady_omega = omega if scene.analysis.kind == "harmonic" else 0.0
+    return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay, spec), extra,
+                   _edge(scene, lay), effects, spec, lay)
+
+
+def _mode(scene: Scene) -> int:
+    if scene.load.kind == "unit":
+        return 1
+    if scene.load.kind == "normal_actuator":
+        return 0
+    return 0 if scene.load.direction == "normal" else 1
+
+
+def _edge(scene: Scene, lay: unit.UnitLayout | None) -> float | None:
+    if lay is not None:
+        return lay.edge
+    return scene.load.radius_m if scene.load.kind == "pressure_patch" else None
+
+
+def _load(scene: Scene, domain: Domain, mode: int, lay, spec) -> NDArray:
+    """Full nodal load at the drive amplitude (for a transient ERM: per newton of force)."""
+    ld = scene.load
+    if ld.kind == "unit":
+        w = 2 * np.pi * scene.analysis.frequency_hz
+        force = spec.motor.unbalance * w**2 if scene.analysis.kind != "transient" else 1.0
+        return loads.axis_point_force(domain, 1, force, z=lay.rotor_z)
+    if ld.kind == "normal_actuator":
+        return loads.axis_point_force(domain, 0, scene.unit.actuator.force_N, z=lay.centre_z)
+    if ld.kind == "point_force":
+        return loads.axis_point_force(domain, mode, ld.force_N)
+    t = ld.amplitude_Pa
+    return loads.surface_traction(domain, mode, ld.radius_m, (0.0, t, 0.0) if mode == 0
+                                  else (t, 0.0, -t))
