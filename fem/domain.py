@@ -142,7 +142,8 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
         r_breaks: radii (m) that must be cell lines (load edges, unit radii).
         z_breaks: depths (m, negative) above the skin that must be cell lines (rotor plane).
         blocks: rectangles above the skin (z < 0) or replacing tissue.
-        damping_rate: peak rate (1/s) of the transient damping layer (default 3 omega).
+        damping_rate: peak rate (1/s) of the transient damping layer
+            (default ``absorbers.DAMPING_LAYER_RATE`` x omega).
     """
     if side not in SIDES or base not in BASES:
         raise ValueError(f"side must be one of {SIDES} and base one of {BASES}")
@@ -174,8 +175,10 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
         if analysis == "static":
             effects.append(f"static far field ({kind})")
             return absorbers.static_extension(end, h_last, size)
-        effects.append(f"{'PML' if analysis == 'harmonic' else 'damping layer'} ({kind})")
-        return absorbers.pml_layout(end, h_last, size, lam_ref, min(h_wave, 4 * spec.far_size))
+        harmonic = analysis == "harmonic"
+        effects.append(f"{'PML' if harmonic else 'damping layer'} ({kind})")
+        return absorbers.pml_layout(end, h_last, size, lam_ref, min(h_wave, 4 * spec.far_size),
+                                    1.0 if harmonic else absorbers.DAMPING_LAYER_WAVELENGTHS)
 
     r_lay = beyond(radius, r_lines, radius, "side") if side == "absorbing" else None
     z_lay = beyond(depth, z_lines, max(depth, radius), "base") if base == "absorbing" else None
@@ -202,7 +205,8 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
                                 r_lay.pml_thickness if r_lay else 0.0, pml_z,
                                 z_lay.pml_thickness if z_lay else 0.0)
     if analysis == "transient" and (pml_r is not None or pml_z is not None):
-        damping = absorbers.DampingLayer(damping_rate or 3.0 * omega, pml_r,
+        rate = damping_rate or absorbers.DAMPING_LAYER_RATE * omega
+        damping = absorbers.DampingLayer(rate, pml_r,
                                          r_lay.pml_thickness if r_lay else 0.0, pml_z,
                                          z_lay.pml_thickness if z_lay else 0.0)
 

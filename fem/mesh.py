@@ -31,6 +31,9 @@ def graded_lines(breaks: NDArray, size_at: callable, min_per_segment: int = 1) -
         min_per_segment: minimum number of cells in every segment.
     """
     breaks = np.unique(np.asarray(breaks, dtype=float))
+    # breakpoints reached by different float paths (3.5 + 2 x 1 mm) must not make sliver cells
+    tol = 1e-9 * max(1.0, float(np.abs(breaks).max()))
+    breaks = breaks[np.concatenate([[True], np.diff(breaks) > tol])]
     lines = [breaks[:1]]
     for a, b in itertools.pairwise(breaks):
         x = np.linspace(a, b, 257)
