@@ -131,6 +131,10 @@ def build_mesh(r_lines: NDArray, z_lines: NDArray, cell_material: NDArray, order
     """
     r_lines = np.asarray(r_lines, dtype=float)
     z_lines = np.asarray(z_lines, dtype=float)
+    for name, lines in (("r_lines", r_lines), ("z_lines", z_lines)):
+        widths = np.diff(lines)
+        if widths.size == 0 or widths.min() <= 1e-9 * max(1.0, float(np.abs(lines).max())):
+            raise ValueError(f"{name} must be strictly increasing without sliver cells")
     nr, nz = r_lines.size - 1, z_lines.size - 1
     if cell_material.shape != (nz, nr):
         raise ValueError(f"cell_material has shape {cell_material.shape}, expected {(nz, nr)}")

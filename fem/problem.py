@@ -110,7 +110,8 @@ def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
                          1e-3 * p.travel_mm, 1e-3 * p.tip_diameter_mm)
     board = _solid(b.E_kPa, b.nu, b.density_kg_m3, 0.0, "pcb", hysteretic)
     return unit.UnitSpec(motor, u.orientation, u.attachment, 1e-3 * b.thickness_mm,
-                         0.5e-3 * b.diameter_mm, board, rings, 1e-3 * u.ring_thickness_mm, pogo)
+                         0.5e-3 * b.diameter_mm, board, rings, 1e-3 * u.ring_thickness_mm, pogo,
+                         1e-3 * u.ring_gap_mm)
 
 
 def mesh_spec(scene: Scene) -> MeshSpec:

@@ -368,6 +368,10 @@ class Unit:
         attachment: "glued" (bonded over its footprint) or "pogo" (spring pins, frictionless).
         encapsulation: silicone rings, inner to outer (0..5).
         ring_thickness_mm: radial width of every ring [mm].
+        ring_gap_mm: radial gap [mm] between the motor/board and the inner ring. The paper's
+            model ties the rings to each other and to the skin only, not to the motor: the
+            default 0.05 mm keeps them apart (micrometre amplitudes never close it); 0 bonds
+            the rings to the motor and board (encapsulation cast around the motor).
         motor, board, pogo, actuator: the parts (``pogo`` used only with attachment "pogo",
             ``actuator`` only with ``load.kind = "normal_actuator"``).
     """
@@ -376,6 +380,7 @@ class Unit:
     attachment: str = "glued"
     encapsulation: tuple[Ring, ...] = ()
     ring_thickness_mm: float = 1.0
+    ring_gap_mm: float = 0.05
     motor: Motor = field(default_factory=Motor)
     board: Board = field(default_factory=Board)
     pogo: Pogo = field(default_factory=Pogo)
@@ -394,7 +399,10 @@ class Unit:
     @property
     def outer_radius_mm(self) -> float:
         """The unit's edge [mm]: core radius plus the rings."""
-        return self.core_radius_mm + len(self.encapsulation) * self.ring_thickness_mm
+        if not self.encapsulation:
+            return self.core_radius_mm
+        rings = len(self.encapsulation) * self.ring_thickness_mm
+        return self.core_radius_mm + self.ring_gap_mm + rings
 
     @property
     def core_radius_m(self) -> float:
@@ -407,7 +415,7 @@ class Unit:
     @property
     def ring_radii_mm(self) -> tuple[tuple[float, float], ...]:
         """(inner, outer) radius [mm] of each ring, inner to outer."""
-        r0, t = self.core_radius_mm, self.ring_thickness_mm
+        r0, t = self.core_radius_mm + self.ring_gap_mm, self.ring_thickness_mm
         return tuple((r0 + i * t, r0 + (i + 1) * t) for i in range(len(self.encapsulation)))
 
     @property
@@ -636,6 +644,7 @@ _UNIT = {
     "orientation": Spec(str, "forward", choices=("forward", "reverse")),
     "attachment": Spec(str, "glued", choices=("glued", "pogo")),
     "ring_thickness_mm": Spec(float, 1.0, "(0, 20]"),
+    "ring_gap_mm": Spec(float, 0.05, "[0, 5]"),
 }
 _UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
     "motor": (Motor, _MOTOR),
@@ -643,7 +652,8 @@ _UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
     "pogo": (Pogo, _POGO),
     "actuator": (Actuator, _ACTUATOR),
 }
-_UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", *_UNIT_PARTS]
+_UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", "ring_gap_mm",
+              *_UNIT_PARTS]
 
 # Table name -> (dataclass, specs). Order matters: intervals may refer to earlier values, and
 # the [unit] checks need tissue.radius_mm and load.kind.

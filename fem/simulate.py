@@ -143,8 +143,8 @@ def simulate(scene: Scene) -> SimulationResult:
     log = OperatorLog()
     edge = problem.edge
     r_probe = np.asarray(scene.output.radii_m)
-    prof_m = _profile_radii(scene, edge or 0.0)
-    radii = np.concatenate([r_probe, [0.0, edge or 0.0], prof_m])
+    prof_mm = _profile_distances_mm(scene, edge or 0.0)
+    radii = np.concatenate([r_probe, [0.0, edge or 0.0], (edge or 0.0) + prof_mm * 1e-3])
     stencil = _stencil(problem, radii, r_probe.size)
     histories, extras = None, {}
     if scene.analysis.kind == "transient":
@@ -171,8 +171,7 @@ def simulate(scene: Scene) -> SimulationResult:
     n = r_probe.size
     edge_mm = None if edge is None else edge * 1e3
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
-                            (prof_m - (edge or 0.0)) * 1e3, vals[n + 2:], meta,
-                            problem.domain, nodal, histories, extras)
+                            prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras)
 
 
 def _stencil(problem, radii: NDArray, centre_index: int) -> tuple[NDArray, NDArray]:
@@ -188,11 +187,12 @@ def _stencil(problem, radii: NDArray, centre_index: int) -> tuple[NDArray, NDArr
     return nodes, weights
 
 
-def _profile_radii(scene: Scene, edge: float) -> NDArray:
+def _profile_distances_mm(scene: Scene, edge: float) -> NDArray:
+    """Distances from the edge (mm) of the profile, within the meshed radius."""
     out = scene.output
-    d = np.arange(0.0, out.profile_length_mm + 1e-9, out.profile_step_mm) * 1e-3
-    r = edge + d
-    return r[r <= scene.tissue.radius_m * (1 + 1e-12)]
+    n = int(np.floor(out.profile_length_mm / out.profile_step_mm + 1e-9))
+    d = out.profile_step_mm * np.arange(n + 1)
+    return d[edge + d * 1e-3 <= scene.tissue.radius_m * (1 + 1e-12)]
 
 
 def resolution_warning(scene: Scene, problem) -> str | None:

@@ -23,7 +23,10 @@ Modelling assumptions (each a choice the paper leaves open; PAPER.md, DESIGN.md 
   between the pins is air. Contact is assumed maintained (the preload k x travel of each pin
   exceeds the dynamic pin force; ``preload`` checks it).
 * **Encapsulation.** Each ring is a hollow cylinder, ``ring_thickness`` wide, from the skin to
-  the top of the motor, bonded to its neighbours, to the skin and to the motor and board inside.
+  the top of the motor, bonded to its neighbours and to the skin. As in the paper's model (ties
+  between the rings and between rings and skin only), the inner ring is not bonded to the
+  motor: a ``ring_gap`` of void (default 0.05 mm) keeps them apart. With ``ring_gap = 0`` the
+  rings are bonded to the motor and board as well (encapsulation cast around the motor).
 * **Centre and edge.** The centre amplitude is the unit's own vibration where it meets the skin:
   the displacement on the axis of its skin-side face (the skin under it when glued, the
   board's underside on pogo pins, where the skin on the axis is untouched). The edge is the
@@ -81,6 +84,7 @@ class UnitSpec:
     rings: tuple[Solid, ...]
     ring_thickness: float
     pogo: PogoSpec | None = None
+    ring_gap: float = 0.0
 
     @property
     def core_radius(self) -> float:
@@ -88,9 +92,16 @@ class UnitSpec:
         return max(self.motor.radius, self.board_radius if self.board_thickness > 0 else 0.0)
 
     @property
+    def ring_start(self) -> float:
+        """Inner radius of the inner ring (m): the core plus the gap that keeps them unbonded."""
+        return self.core_radius + self.ring_gap
+
+    @property
     def outer_radius(self) -> float:
         """The unit's edge (m)."""
-        return self.core_radius + len(self.rings) * self.ring_thickness
+        if not self.rings:
+            return self.core_radius
+        return self.ring_start + len(self.rings) * self.ring_thickness
 
 
 @dataclass(frozen=True)
@@ -164,13 +175,13 @@ def layout(unit: UnitSpec, encapsulation: bool = True, unit_mass: bool = True,
     if unit.board_thickness > 0:
         board = unit.board if unit_mass else Solid(unit.board.E, unit.board.nu, 0.0, 0.0, "pcb")
         blocks.append(Block(0.0, unit.board_radius, z_motor_bottom, z_board_bottom, board))
-    r_in = unit.core_radius
+    r_in = unit.ring_start
     if encapsulation:
         for i, ring in enumerate(unit.rings):
             r0 = r_in + i * unit.ring_thickness
             blocks.append(Block(r0, r0 + unit.ring_thickness, z_motor_top, 0.0, ring))
 
-    r_breaks = [m.radius, r_in, unit.outer_radius]
+    r_breaks = [m.radius, unit.core_radius, r_in, unit.outer_radius]
     pins = None
     if unit.attachment == "pogo":
         p = unit.pogo
