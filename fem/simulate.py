@@ -211,9 +211,12 @@ def resolution_warning(scene: Scene, problem) -> str | None:
     if worst is None:
         return None
     name, per_wave, lam = worst
-    return (f"under-resolved: {per_wave:.1f} elements per shear wavelength ({lam * 1e3:.1f} mm) "
-            f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g}; "
-            f"use far_size_mm <= {lam * 1e3 / need:.2f} or mesh.order = 2 for < 1 % error")
+    advice = f"use far_size_mm <= {np.floor(lam * 1e6 / need) / 1e3:g}"
+    if scene.mesh.order == 1:
+        advice += " or mesh.order = 2"
+    return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
+            f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g} and "
+            f"order {scene.mesh.order}; {advice} (about 1 % error)")
 
 
 def drive_frequency_hz(scene: Scene) -> float:

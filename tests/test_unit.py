@@ -137,7 +137,7 @@ def test_skipped_encapsulation_meshes_no_rings_and_keeps_the_nominal_edge():
 def test_skipped_unit_mass_and_rocking_change_the_model():
     full = build_problem(load_scene(POGO))
     light = build_problem(_scene(unit_mass=False, rocking=False))
-    motor = [s for s in light.domain.solids if s.name == "motor"][0]
+    motor = next(s for s in light.domain.solids if s.name == "motor")
     assert motor.density == 0.0
     assert light.layout.rotor_z == light.layout.contact_z - 0.1e-3  # at the motor's base face
     assert full.layout.rotor_z < light.layout.rotor_z
@@ -163,5 +163,5 @@ def test_inertia_requested_for_a_static_scene_is_rejected():
     d = scene_to_dict(load_scene(POGO))
     d["analysis"]["kind"] = "static"
     d["effects"] = {"inertia": True}
-    with pytest.raises(SceneError, match="effects.inertia"):
+    with pytest.raises(SceneError, match=r"effects\.inertia"):
         build_problem(scene_from_dict(d))
