@@ -95,7 +95,26 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
     if u is not None and u.attachment == "pogo" and not chosen["pogo"]:
         raise SceneError("effects.pogo", "effects.pogo = false conflicts with unit.attachment = "
                          "'pogo'; set attachment = 'glued' to drop the pins")
+    _check_unit_restrained(scene, chosen)
     return chosen
+
+
+def _check_unit_restrained(scene: Scene, effects: dict[str, bool]) -> None:
+    """A unit on frictionless pins whose rings do not touch it (ring_gap_mm > 0, or no rings)
+    is held sideways only by its own inertia: without inertia or mass it is a mechanism."""
+    u = scene.unit
+    if u is None or u.attachment != "pogo":
+        return
+    bonded_rings = u.ring_gap_mm == 0 and u.encapsulation and effects["encapsulation"]
+    if bonded_rings:
+        return
+    for name in ("inertia", "unit_mass"):
+        if not effects[name]:
+            raise SceneError(
+                f"effects.{name}",
+                f"effects.{name} = false leaves the unit on frictionless pogo pins with nothing "
+                "holding it sideways (its rings are not bonded to it: unit.ring_gap_mm > 0); "
+                "keep inertia and unit mass, or set unit.ring_gap_mm = 0")
 
 
 def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:

@@ -973,7 +973,7 @@ def _check_unit_geometry(u: Mapping[str, Any], ctx: Mapping[str, Any]) -> None:
     motor_d = u["motor"]["diameter_mm"]
     core = _core_radius_mm(motor_d, board["thickness_mm"], board["diameter_mm"])
     n = len(u["encapsulation"])
-    outer = core + n * u["ring_thickness_mm"]
+    outer = core + (u["ring_gap_mm"] + n * u["ring_thickness_mm"] if n else 0.0)
     tissue = ctx["tissue.radius_mm"]
     if not outer < tissue:
         # blame the part that sets the size: the rings, else the motor or the board
@@ -983,9 +983,10 @@ def _check_unit_geometry(u: Mapping[str, Any], ctx: Mapping[str, Any]) -> None:
             where = "unit.motor.diameter_mm"
         else:
             where = "unit.board.diameter_mm"
-        raise SceneError(where, f"the unit's outer radius {outer:g} mm (core {core:g} mm + {n} "
-                         f"ring(s) x {u['ring_thickness_mm']:g} mm), set by {where}, is out of "
-                         f"range: allowed outer radius < tissue.radius_mm (= {tissue:g})")
+        gap = f" + {u['ring_gap_mm']:g} mm gap" if n else ""
+        raise SceneError(where, f"the unit's outer radius {outer:g} mm (core {core:g} mm{gap} + "
+                         f"{n} ring(s) x {u['ring_thickness_mm']:g} mm), set by {where}, is out "
+                         f"of range: allowed outer radius < tissue.radius_mm (= {tissue:g})")
 
 
 def _read_table(name: str, raw: Any, ctx: dict[str, Any]) -> dict[str, Any]:
@@ -1031,7 +1032,7 @@ def _build_unit(u: Mapping[str, Any]) -> Unit:
     parts = {name: _make(cls, u[name]) for name, (cls, _) in _UNIT_PARTS.items() if name in u}
     return Unit(u["orientation"], u["attachment"],
                 tuple(_make(Ring, ring) for ring in u["encapsulation"]), u["ring_thickness_mm"],
-                **parts)
+                u["ring_gap_mm"], **parts)
 
 
 def _build(resolved: Mapping[str, Mapping[str, Any]]) -> Scene:

@@ -150,12 +150,29 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         A = A + assemble_matrix(dm, Ke, edofs)
         log.add(name, mode)
     rhs = assemble_vector(dm, load_full) + prescribed_load(dm, Ze)
-    u = dm.expand(factorize(A).solve(rhs.astype(A.dtype)))
+    u = dm.expand(checked_solve(A, rhs))
     if inner.size:
         u = u.astype(np.result_type(u, recover))
         u[element_dofs[:, inner]] = np.einsum("ecb,eb->ec", recover, u[dm.element_dofs])
     # unknowns of the discretisation: the global system plus the condensed interior dofs
     return ModeSolution(mode, dm, u, dm.n_free + mesh.n_elements * inner.size)
+
+
+#: Largest relative residual ||A x - b|| / ||b|| a direct solve may leave.
+RESIDUAL_TOLERANCE = 1e-6
+
+
+def checked_solve(A: sp.spmatrix, b: NDArray) -> NDArray:
+    """Solve A x = b with one factorisation; raise if the answer is not finite or does not
+    satisfy the system (a singular operator: an unrestrained body, a mechanism)."""
+    x = factorize(A).solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    norm_b = np.linalg.norm(b)
+    residual = np.linalg.norm(A @ x - b) / norm_b if norm_b > 0 else np.linalg.norm(x)
+    if not np.all(np.isfinite(x)) or residual > RESIDUAL_TOLERANCE:
+        raise FloatingPointError(
+            f"the system is singular or ill-posed (relative residual {residual:.1e}): a part of "
+            "the model is not restrained; check boundary conditions and effects")
+    return x
 
 
 class UmfpackLU:

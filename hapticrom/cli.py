@@ -47,6 +47,13 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reproduce(args: argparse.Namespace) -> int:
+    from fem.reproduce import reproduce
+
+    reproduce(args.out, workers=args.workers, quick=args.quick)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="hapticrom",
@@ -59,6 +66,14 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--vtk", metavar="OUT", help="write the field for ParaView (.vtu)")
     sim.add_argument("--plot", metavar="OUT", help="write a PNG of amplitude against radius")
     sim.set_defaults(func=_simulate)
+
+    rep = sub.add_parser("reproduce", help="re-run the paper's studies and write a report")
+    rep.add_argument("--out", default="reports/reproduce", metavar="DIR",
+                     help="report directory, replaced as a whole (default: reports/reproduce)")
+    rep.add_argument("--workers", type=int, metavar="N",
+                     help="worker processes (default: every core)")
+    rep.add_argument("--quick", action="store_true", help="a reduced set of cases (for tests)")
+    rep.set_defaults(func=_reproduce)
 
     try:
         from surrogate import cli as surrogate_cli
@@ -74,7 +89,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except ValueError as exc:  # the library raises ValueError (SceneError, ...) for bad input
+    except (ValueError, FloatingPointError) as exc:  # bad input, or an ill-posed model from it
         print(f"hapticrom: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # unreadable input file, unwritable output

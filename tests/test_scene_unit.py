@@ -9,6 +9,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -101,8 +102,9 @@ def test_examples_are_the_paper_designs() -> None:
     p = triple.unit.pogo
     assert (p.count, p.radius_mm, p.length_mm, p.travel_mm, p.stiffness_N_m) == (
         3, 2.25, 2.4, 0.3, 2942.0)
-    # 7 mm motor, 1 mm rings: edges at 3.5, 5.5 and 6.5 mm
-    assert [s.unit.outer_radius_mm for s in (bare, double, triple)] == [3.5, 5.5, 6.5]
+    # 7 mm motor, 0.05 mm gap (rings not tied to the motor), 1 mm rings: edges 3.5, 5.55, 6.55
+    assert [s.unit.outer_radius_mm for s in (bare, double, triple)] == pytest.approx(
+        [3.5, 5.55, 6.55])
 
 
 def test_transient_example_is_design_3_switched_on_and_off() -> None:
@@ -156,8 +158,8 @@ def test_unit_geometry_properties() -> None:
     u = Unit(encapsulation=list(rings), ring_thickness_mm=1.5)
     assert u.encapsulation == rings  # list stored as a tuple
     assert u.core_radius_mm == 3.5
-    assert u.ring_radii_mm == ((3.5, 5.0), (5.0, 6.5), (6.5, 8.0))
-    assert u.outer_radius_mm == 8.0 and u.outer_radius_m == pytest.approx(8e-3)
+    assert np.allclose(u.ring_radii_mm, ((3.55, 5.05), (5.05, 6.55), (6.55, 8.05)))
+    assert u.outer_radius_mm == pytest.approx(8.05) and u.outer_radius_m == pytest.approx(8.05e-3)
     big_board = Unit(board=Board(diameter_mm=10.0))
     assert big_board.core_radius_mm == 5.0
     no_board = Unit(board=Board(thickness_mm=0.0, diameter_mm=10.0))  # absent board: no size
@@ -325,8 +327,8 @@ def test_pogo_needs_a_board() -> None:
 
 
 @pytest.mark.parametrize(("unit", "tissue_mm", "field"), [
-    ({"encapsulation": ["A", "C", "D"]}, 6.5, "unit.encapsulation"),  # 3.5 + 3 = 6.5, not < 6.5
-    ({"encapsulation": ["A"], "ring_thickness_mm": 20.0}, 23.5, "unit.encapsulation"),
+    ({"encapsulation": ["A", "C", "D"]}, 6.55, "unit.encapsulation"),  # 3.5 + 0.05 + 3 = 6.55
+    ({"encapsulation": ["A"], "ring_thickness_mm": 20.0}, 23.55, "unit.encapsulation"),
     ({"motor": {"diameter_mm": 12.0}}, 6.0, "unit.motor.diameter_mm"),
     ({"board": {"diameter_mm": 12.0}}, 6.0, "unit.board.diameter_mm"),
 ])

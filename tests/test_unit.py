@@ -13,6 +13,7 @@ from fem.unit import pin_compression
 from hapticrom.cli import main
 
 POGO = "examples/unit-triple-reverse-pogo.toml"
+GLUED = "examples/unit-double-forward.toml"
 NU = 0.4999  # bonded rigid disc: the normal-tangential coupling vanishes, formulas are exact
 MU = 100e3 / (2 * (1 + NU))
 A = 3.5e-3
@@ -120,7 +121,7 @@ def test_skipped_inertia_never_builds_a_mass_matrix(monkeypatch):
         raise AssertionError("mass assembled although inertia is off")
 
     monkeypatch.setattr(elements, "mass", forbidden)
-    res = simulate(_scene(inertia=False))
+    res = simulate(_scene(GLUED, inertia=False))
     assert "inertia" in res.meta["skipped"]
     assert not any(op.startswith("mass") for op in res.meta["operators"])
 
@@ -135,12 +136,27 @@ def test_skipped_encapsulation_meshes_no_rings_and_keeps_the_nominal_edge():
 
 
 def test_skipped_unit_mass_and_rocking_change_the_model():
-    full = build_problem(load_scene(POGO))
-    light = build_problem(_scene(unit_mass=False, rocking=False))
+    full = build_problem(load_scene(GLUED))
+    light = build_problem(_scene(GLUED, unit_mass=False, rocking=False))
     motor = next(s for s in light.domain.solids if s.name == "motor")
     assert motor.density == 0.0
     assert light.layout.rotor_z == light.layout.contact_z - 0.1e-3  # at the motor's base face
     assert full.layout.rotor_z < light.layout.rotor_z
+    assert simulate(scene_from_dict(scene_to_dict(light_scene := _scene(
+        GLUED, unit_mass=False)))).center_amplitude_um > 0 and light_scene.unit is not None
+
+
+@pytest.mark.parametrize("effect", ["inertia", "unit_mass"])
+def test_unit_floating_on_frictionless_pins_needs_inertia(effect):
+    """Rings not bonded to the unit (the default gap) leave only its inertia holding it
+    sideways: switching that off is rejected, bonding the rings makes it well-posed."""
+    with pytest.raises(SceneError) as err:
+        build_problem(_scene(**{effect: False}))
+    assert err.value.field == f"effects.{effect}" and "ring_gap_mm" in str(err.value)
+    d = scene_to_dict(_scene(**{effect: False}))
+    d["unit"]["ring_gap_mm"] = 0.0
+    res = simulate(scene_from_dict(d))
+    assert np.isfinite(res.normalized_edge) and res.center_amplitude_um > 0
 
 
 def test_glued_unit_builds_no_pin_operator():
