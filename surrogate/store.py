@@ -364,9 +364,15 @@ def profile_matrix(df: Any, grid_mm: Sequence[float],
 # --------------------------------------------------------------------------- solver identity
 
 
+#: fem modules that cannot change a solution (reports, closed-form references): editing them
+#: must not mark a dataset as coming from another solver.
+NOT_SOLVER_SOURCES = frozenset({"reproduce.py", "analytic.py"})
+
+
 def solver_info(git: bool = True) -> dict[str, Any]:
     """Identity of the installed solver: ``version`` (fem.SOLVER_VERSION), ``source_sha256``
-    (hash of every .py file of the fem package: changes with any code edit, git or not),
+    (hash of every .py file of the fem package but ``NOT_SOLVER_SOURCES``: changes with any
+    solver code edit, git or not),
     ``hash`` (its first 12 hex digits, stored per row) and ``git_revision`` (HEAD of the
     repository holding fem, "+dirty" when fem/ has uncommitted changes; "unknown" outside
     git or with ``git=False``)."""
@@ -377,6 +383,8 @@ def solver_info(git: bool = True) -> dict[str, Any]:
     root = Path(fem.__file__).resolve().parent
     digest = hashlib.sha256()
     for f in sorted(root.rglob("*.py")):
+        if f.name in NOT_SOLVER_SOURCES:
+            continue
         digest.update(f.relative_to(root).as_posix().encode() + b"\0")
         digest.update(f.read_bytes() + b"\0")
     source = digest.hexdigest()
