@@ -14,8 +14,14 @@ $(STAMP): pyproject.toml constraints.txt
 
 venv: $(STAMP)
 
+UNITS := unit-bare-forward unit-double-forward unit-triple-reverse-pogo
+
 demo: $(STAMP)
+	mkdir -p out
 	$(BIN)/hapticrom simulate examples/forearm.toml --json out/forearm.json --plot out/forearm.png --vtk out/forearm.vtu
+	for u in $(UNITS); do \
+	  $(BIN)/hapticrom simulate examples/$$u.toml --json out/$$u.json --plot out/$$u.png || exit 1; \
+	done
 
 test: $(STAMP)
 	$(BIN)/ruff check .
@@ -29,6 +35,9 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/bench_fem.py
+	$(BIN)/python bench/bench_effects.py
+	$(BIN)/python bench/bench_absorber.py
+	$(BIN)/python bench/bench_generate.py
 
 clean:
 	rm -rf $(VENV) out
