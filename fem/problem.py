@@ -123,14 +123,13 @@ def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
     m, b, p = u.motor, u.board, u.pogo
     rings = tuple(_solid(r.E_kPa, r.nu, r.density_kg_m3, r.loss_factor, r.name, hysteretic)
                   for r in u.encapsulation)
-    motor = unit.MotorSpec(0.5e-3 * m.diameter_mm, 1e-3 * m.height_mm, 1e-3 * m.mass_g,
-                           m.unbalance_kg_m, 1e-3 * m.rotor_height_mm, m.E_kPa * 1e3, m.nu)
-    pogo = unit.PogoSpec(p.count, 1e-3 * p.radius_mm, p.stiffness_N_m, 1e-3 * p.length_mm,
-                         1e-3 * p.travel_mm, 1e-3 * p.tip_diameter_mm)
+    motor = unit.MotorSpec(m.radius_m, m.height_m, m.mass_kg, m.unbalance_kg_m,
+                           m.rotor_height_m, m.E_Pa, m.nu)
+    pogo = unit.PogoSpec(p.count, p.radius_m, p.stiffness_N_m, p.length_m, p.travel_m,
+                         p.tip_diameter_m)
     board = _solid(b.E_kPa, b.nu, b.density_kg_m3, 0.0, "pcb", hysteretic)
-    return unit.UnitSpec(motor, u.orientation, u.attachment, 1e-3 * b.thickness_mm,
-                         0.5e-3 * b.diameter_mm, board, rings, 1e-3 * u.ring_thickness_mm, pogo,
-                         1e-3 * u.ring_gap_mm)
+    return unit.UnitSpec(motor, u.orientation, u.attachment, b.thickness_m, b.radius_m, board,
+                         rings, u.ring_thickness_m, pogo, 1e-3 * u.ring_gap_mm)
 
 
 def mesh_spec(scene: Scene) -> MeshSpec:
