@@ -83,12 +83,15 @@ def axis_constraints(mode: int) -> tuple[list[int], bool]:
 
 def build_dofmap(mesh: Mesh, mode: int,
                  fixed: Sequence[tuple[NDArray, int]] = (),
-                 prescribed: Sequence[tuple[NDArray, int, NDArray]] = ()) -> DofMap:
+                 prescribed: Sequence[tuple[NDArray, int, NDArray]] = (),
+                 ties: Sequence[tuple[NDArray, NDArray, int]] = ()) -> DofMap:
     """Number the free dofs of ``mode`` on ``mesh``.
 
     Args:
         fixed: (node indices, component) pairs held at zero.
         prescribed: (node indices, component, values in m) pairs held at given values.
+        ties: (follower nodes, leader nodes, component): the follower's component equals the
+            leader's (a frictionless contact passes the normal component only).
     """
     ndpn = dofs_per_node(mode)
     n_full = mesh.n_nodes * ndpn
@@ -114,6 +117,9 @@ def build_dofmap(mesh: Mesh, mode: int,
         ur = axis_nodes * ndpn + UR
         tie_to[ut] = ur
         coef[ut] = -1.0
+    for followers, leaders, comp in ties:
+        if comp < ndpn:
+            tie_to[np.asarray(followers) * ndpn + comp] = np.asarray(leaders) * ndpn + comp
     is_fixed |= is_fixed[tie_to]  # a tied dof follows its partner
 
     primary = (~is_fixed) & (tie_to == np.arange(n_full))

@@ -84,6 +84,7 @@ class Domain:
         damping: graded damping layer (transient absorber) or None.
         constraints: (nodes, component) pairs held at zero; a fixed boundary lists its nodes
             for every component, a roller only the normal one.
+        ties: (follower nodes, leader nodes, component) pairs with equal displacement.
         effects: physical effects the discretisation includes, for the summary.
         skipped: effects left out because the scene does not need them.
     """
@@ -97,6 +98,7 @@ class Domain:
     stretch: absorbers.PML | None = None
     damping: absorbers.DampingLayer | None = None
     constraints: tuple[tuple[NDArray, int], ...] = ()
+    ties: tuple[tuple[NDArray, NDArray, int], ...] = ()
     effects: tuple[str, ...] = ()
     skipped: tuple[str, ...] = ()
 
@@ -214,7 +216,7 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
         (effects if on else skipped).append(name)
     if side != "absorbing" and base != "absorbing":
         skipped.append("absorbing boundary")
-    domain = Domain(mesh, solids, radius, depth, side, base, stretch, damping, (),
+    domain = Domain(mesh, solids, radius, depth, side, base, stretch, damping, (), (),
                     tuple(effects), tuple(skipped))
     held = [domain.boundary_nodes(w) for w, kind in (("side", side), ("base", base))
             if kind in ("absorbing", "fixed")]

@@ -9,12 +9,13 @@ hysteretic damping, no ring cells without encapsulation, no pin operator without
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from . import loads, unit
+from .assembly import UR
 from .domain import Domain, MeshSpec, Solid, layered_domain
 from .scene import Scene, SceneError
 
@@ -100,21 +101,21 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
 
 
 def _check_unit_restrained(scene: Scene, effects: dict[str, bool]) -> None:
-    """A unit on frictionless pins whose rings do not touch it (ring_gap_mm > 0, or no rings)
-    is held sideways only by its own inertia: without inertia or mass it is a mechanism."""
+    """A unit on frictionless pins whose rings do not touch it (ring_contact = "none", or no
+    rings) is held sideways only by its own inertia: without inertia or mass it is a mechanism,
+    and a transient spin-up makes it drift away."""
     u = scene.unit
     if u is None or u.attachment != "pogo":
         return
-    bonded_rings = u.ring_gap_mm == 0 and u.encapsulation and effects["encapsulation"]
-    if bonded_rings:
+    if u.encapsulation and effects["encapsulation"] and u.ring_contact != "none":
         return
+    why = ("leaves the unit on frictionless pogo pins with nothing holding it sideways (no "
+           "rings touch it); give it rings with unit.ring_contact = 'frictionless' or 'bonded'")
     for name in ("inertia", "unit_mass"):
         if not effects[name]:
-            raise SceneError(
-                f"effects.{name}",
-                f"effects.{name} = false leaves the unit on frictionless pogo pins with nothing "
-                "holding it sideways (its rings are not bonded to it: unit.ring_gap_mm > 0); "
-                "keep inertia and unit mass, or set unit.ring_gap_mm = 0")
+            raise SceneError(f"effects.{name}", f"effects.{name} = false {why}")
+    if scene.analysis.kind == "transient":
+        raise SceneError("unit.ring_contact", f"a transient spin-up {why}: it would drift away")
 
 
 def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
@@ -129,7 +130,7 @@ def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
                          p.tip_diameter_m)
     board = _solid(b.E_kPa, b.nu, b.density_kg_m3, 0.0, "pcb", hysteretic)
     return unit.UnitSpec(motor, u.orientation, u.attachment, b.thickness_m, b.radius_m, board,
-                         rings, u.ring_thickness_m, pogo, 1e-3 * u.ring_gap_mm)
+                         rings, u.ring_thickness_m, pogo, 1e-3 * u.ring_gap_mm, u.ring_contact)
 
 
 def mesh_spec(scene: Scene) -> MeshSpec:
@@ -167,6 +168,8 @@ def build_problem(scene: Scene) -> Problem:
         breaks = [scene.load.radius_m] if scene.load.kind == "pressure_patch" else []
         domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
                                 scene.tissue.base, mesh_spec(scene), analysis, omega, breaks)
+    if lay is not None and lay.contact_ties is not None:
+        domain = replace(domain, ties=(ring_contact_ties(domain, *lay.contact_ties),))
     mode = _mode(scene)
     extra = ()
     if lay is not None and lay.pins is not None:
@@ -174,6 +177,25 @@ def build_problem(scene: Scene) -> Problem:
     steady_omega = omega if scene.analysis.kind == "harmonic" else 0.0
     return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay, spec), extra,
                    _edge(scene, lay), effects, spec, lay)
+
+
+def ring_contact_ties(domain: Domain, r_core: float, r_ring: float, z_top: float,
+                      z_bottom: float) -> tuple[NDArray, NDArray, int]:
+    """Frictionless contact across the slit between the core and the inner ring: the ring's
+    radial displacement follows the core's at every node height over the core's face."""
+    nodes = domain.mesh.nodes
+    tol = 1e-9
+
+    def face(r: float) -> NDArray:
+        on = (np.abs(nodes[:, 0] - r) < tol) & (nodes[:, 1] >= z_top - tol) & (
+            nodes[:, 1] <= z_bottom + tol)
+        idx = np.flatnonzero(on)
+        return idx[np.argsort(nodes[idx, 1])]
+
+    core, ring = face(r_core), face(r_ring)
+    if core.size != ring.size or not np.allclose(nodes[core, 1], nodes[ring, 1]):
+        raise ValueError("ring contact faces do not match node for node")
+    return ring, core, UR
 
 
 def _mode(scene: Scene) -> int:

@@ -368,10 +368,11 @@ class Unit:
         attachment: "glued" (bonded over its footprint) or "pogo" (spring pins, frictionless).
         encapsulation: silicone rings, inner to outer (0..5).
         ring_thickness_mm: radial width of every ring [mm].
-        ring_gap_mm: radial gap [mm] between the motor/board and the inner ring. The paper's
-            model ties the rings to each other and to the skin only, not to the motor: the
-            default 0.05 mm keeps them apart (micrometre amplitudes never close it); 0 bonds
-            the rings to the motor and board (encapsulation cast around the motor).
+        ring_contact: how the inner ring meets the motor and board. "frictionless" (default):
+            a snug fit that passes normal pressure but no shear (the paper ties the rings to
+            each other and to the skin only); "bonded": cast around the motor; "none": no
+            interaction at all. Except when bonded, a slit of ``RING_GAP_MM`` separates the
+            meshes so that only what the contact passes is tied.
         motor, board, pogo, actuator: the parts (``pogo`` used only with attachment "pogo",
             ``actuator`` only with ``load.kind = "normal_actuator"``).
     """
@@ -380,7 +381,7 @@ class Unit:
     attachment: str = "glued"
     encapsulation: tuple[Ring, ...] = ()
     ring_thickness_mm: float = 1.0
-    ring_gap_mm: float = 0.05
+    ring_contact: str = "frictionless"
     motor: Motor = field(default_factory=Motor)
     board: Board = field(default_factory=Board)
     pogo: Pogo = field(default_factory=Pogo)
@@ -388,6 +389,13 @@ class Unit:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "encapsulation", tuple(self.encapsulation))
+
+    @property
+    def ring_gap_mm(self) -> float:
+        """Slit [mm] between the core and the inner ring: 0 when bonded (or without rings)."""
+        if not self.encapsulation or self.ring_contact == "bonded":
+            return 0.0
+        return RING_GAP_MM
 
     @property
     def core_radius_mm(self) -> float:
@@ -431,6 +439,11 @@ class Unit:
     def ring_thickness_m(self) -> float:
         return self.ring_thickness_mm * 1e-3
 
+
+#: Radial slit [mm] between a unit's core and its inner ring when they are not bonded: it keeps
+#: the meshes apart so that only what the contact transmits is tied. Micrometre amplitudes
+#: never close it; it moves the unit's edge out by this much.
+RING_GAP_MM = 0.05
 
 EFFECT_NAMES = ("inertia", "hysteretic_damping", "encapsulation", "pogo", "unit_mass", "rocking",
                 "spin_up", "preload")
@@ -644,7 +657,7 @@ _UNIT = {
     "orientation": Spec(str, "forward", choices=("forward", "reverse")),
     "attachment": Spec(str, "glued", choices=("glued", "pogo")),
     "ring_thickness_mm": Spec(float, 1.0, "(0, 20]"),
-    "ring_gap_mm": Spec(float, 0.05, "[0, 5]"),
+    "ring_contact": Spec(str, "frictionless", choices=("frictionless", "bonded", "none")),
 }
 _UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
     "motor": (Motor, _MOTOR),
@@ -652,7 +665,7 @@ _UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
     "pogo": (Pogo, _POGO),
     "actuator": (Actuator, _ACTUATOR),
 }
-_UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", "ring_gap_mm",
+_UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", "ring_contact",
               *_UNIT_PARTS]
 
 # Table name -> (dataclass, specs). Order matters: intervals may refer to earlier values, and
@@ -973,7 +986,8 @@ def _check_unit_geometry(u: Mapping[str, Any], ctx: Mapping[str, Any]) -> None:
     motor_d = u["motor"]["diameter_mm"]
     core = _core_radius_mm(motor_d, board["thickness_mm"], board["diameter_mm"])
     n = len(u["encapsulation"])
-    outer = core + (u["ring_gap_mm"] + n * u["ring_thickness_mm"] if n else 0.0)
+    gap_mm = RING_GAP_MM if n and u["ring_contact"] != "bonded" else 0.0
+    outer = core + (gap_mm + n * u["ring_thickness_mm"] if n else 0.0)
     tissue = ctx["tissue.radius_mm"]
     if not outer < tissue:
         # blame the part that sets the size: the rings, else the motor or the board
@@ -983,7 +997,7 @@ def _check_unit_geometry(u: Mapping[str, Any], ctx: Mapping[str, Any]) -> None:
             where = "unit.motor.diameter_mm"
         else:
             where = "unit.board.diameter_mm"
-        gap = f" + {u['ring_gap_mm']:g} mm gap" if n else ""
+        gap = f" + {gap_mm:g} mm slit" if gap_mm else ""
         raise SceneError(where, f"the unit's outer radius {outer:g} mm (core {core:g} mm{gap} + "
                          f"{n} ring(s) x {u['ring_thickness_mm']:g} mm), set by {where}, is out "
                          f"of range: allowed outer radius < tissue.radius_mm (= {tissue:g})")
@@ -1032,7 +1046,7 @@ def _build_unit(u: Mapping[str, Any]) -> Unit:
     parts = {name: _make(cls, u[name]) for name, (cls, _) in _UNIT_PARTS.items() if name in u}
     return Unit(u["orientation"], u["attachment"],
                 tuple(_make(Ring, ring) for ring in u["encapsulation"]), u["ring_thickness_mm"],
-                u["ring_gap_mm"], **parts)
+                u["ring_contact"], **parts)
 
 
 def _build(resolved: Mapping[str, Mapping[str, Any]]) -> Scene:

@@ -140,7 +140,7 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
     if inner.size:
         centres = mesh.elements[:, 1 + (mesh.order + 1)]
         fixed += [(centres, c) for c in range(elements.dofs_per_node(mode))]
-    dm = build_dofmap(mesh, mode, fixed, prescribed)
+    dm = build_dofmap(mesh, mode, fixed, prescribed, domain.ties)
     element_dofs = dm.element_dofs
     if inner.size:
         Ze, outer, recover = condense(Ze, inner)
@@ -228,7 +228,7 @@ def natural_frequencies(domain: Domain, mode: int, k: int = 6, sigma_hz: float =
 def natural_modes(domain: Domain, mode: int, k: int = 6,
                   sigma_hz: float = 0.0) -> tuple[NDArray, NDArray]:
     """Natural frequencies (Hz, ascending) and full-dof mode shapes (n_full, k) of ``mode``."""
-    dm = build_dofmap(domain.mesh, mode, domain.fixed())
+    dm = build_dofmap(domain.mesh, mode, domain.fixed(), ties=domain.ties)
     g = elements.gauss_data(domain.mesh)
     mu, kappa = domain.element_property("mu"), domain.element_property("kappa")
     K = assemble_matrix(dm, elements.stiffness(g, mode, mu, kappa))

@@ -53,7 +53,7 @@ class Histories:
 def system_matrices(problem: Problem, omega_ref: float, log: OperatorLog):
     """Reduced K, M, C (real, sparse) and the dof map of the problem's mode."""
     d, mode = problem.domain, problem.mode
-    dm = build_dofmap(d.mesh, mode, d.fixed())
+    dm = build_dofmap(d.mesh, mode, d.fixed(), ties=d.ties)
     g = elements.gauss_data(d.mesh)
     mu, kappa = d.element_property("mu"), d.element_property("kappa")
     density = d.element_property("density")

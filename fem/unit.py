@@ -23,10 +23,12 @@ Modelling assumptions (each a choice the paper leaves open; PAPER.md, DESIGN.md 
   between the pins is air. Contact is assumed maintained (the preload k x travel of each pin
   exceeds the dynamic pin force; ``preload`` checks it).
 * **Encapsulation.** Each ring is a hollow cylinder, ``ring_thickness`` wide, from the skin to
-  the top of the motor, bonded to its neighbours and to the skin. As in the paper's model (ties
-  between the rings and between rings and skin only), the inner ring is not bonded to the
-  motor: a ``ring_gap`` of void (default 0.05 mm) keeps them apart. With ``ring_gap = 0`` the
-  rings are bonded to the motor and board as well (encapsulation cast around the motor).
+  the top of the motor, bonded to its neighbours and to the skin. The paper ties the rings to
+  each other and to the skin only; how the inner ring meets the motor is ``ring_contact``:
+  "frictionless" (default) a snug fit that passes normal pressure but no shear, modelled by
+  tying the radial displacement across a 0.05 mm slit over the core's height; "bonded" cast
+  around the motor (shared nodes); "none" no interaction. With "none" and pogo pins nothing
+  but its inertia holds the unit sideways: a transient drifts, a static solve is singular.
 * **Centre and edge.** The centre amplitude is the unit's own vibration where it meets the skin:
   the displacement on the axis of its skin-side face (the skin under it when glued, the
   board's underside on pogo pins, where the skin on the axis is untouched). The edge is the
@@ -85,6 +87,7 @@ class UnitSpec:
     ring_thickness: float
     pogo: PogoSpec | None = None
     ring_gap: float = 0.0
+    ring_contact: str = "bonded"
 
     @property
     def core_radius(self) -> float:
@@ -138,6 +141,8 @@ class UnitLayout:
             on pogo pins. Its centre is the unit's "centre amplitude".
         pins: the smeared pogo pins, or None when glued.
         edge: the unit's outer radius (m).
+        contact_ties: (r_core, r_ring, z_top, z_bottom) of a frictionless ring contact: the
+            radial displacement is tied across the slit over that height; None otherwise.
     """
 
     blocks: tuple[Block, ...]
@@ -148,6 +153,7 @@ class UnitLayout:
     contact_z: float
     pins: PinRing | None
     edge: float
+    contact_ties: tuple[float, float, float, float] | None = None
 
 
 def layout(unit: UnitSpec, encapsulation: bool = True, unit_mass: bool = True,
@@ -191,9 +197,12 @@ def layout(unit: UnitSpec, encapsulation: bool = True, unit_mass: bool = True,
     z_breaks = (z_motor_top, z_motor_bottom, z_board_bottom, rotor_z, 0.5 * (z_motor_top
                                                                             + z_motor_bottom))
     contact_z = z_board_bottom if unit.board_thickness > 0 else z_motor_bottom
+    ties = None
+    if encapsulation and unit.rings and unit.ring_contact == "frictionless":
+        ties = (unit.core_radius, r_in, z_motor_top, contact_z)
     return UnitLayout(tuple(blocks), tuple(r_breaks), tuple(sorted(set(z_breaks))), rotor_z,
                       0.5 * (z_motor_top + z_motor_bottom), contact_z, pins,
-                      unit.outer_radius)
+                      unit.outer_radius, ties)
 
 
 def pin_compression(domain: Domain, mode: int, pins: PinRing) -> tuple[NDArray, NDArray]:

@@ -114,7 +114,8 @@ def test_default_quadratic_mesh_raises_no_resolution_warning():
 
 
 def test_low_frequency_unit_tends_to_its_static_response():
-    """At 1 Hz inertia is negligible: the harmonic answer approaches the static one."""
+    """At 1 Hz inertia is negligible: the harmonic answer approaches the static one (the pogo
+    unit is held sideways by its frictionless ring contact, so the static solve is posed)."""
     harmonic = simulate(scene_from_dict(_with(POGO, analysis={"frequency_hz": 1.0})))
     static = simulate(scene_from_dict(_with(POGO, analysis={"kind": "static",
                                                             "frequency_hz": 1.0})))

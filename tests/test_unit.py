@@ -79,8 +79,13 @@ def test_glued_unit_centre_is_the_skin_and_pogo_centre_is_the_board():
         "examples/unit-bare-forward.toml")), "output": {"radii_mm": [0.0]}}))
     assert glued.center_amplitude_um == pytest.approx(float(np.linalg.norm(skin.U[0]) * 1e6))
     pogo = simulate(load_scene(POGO))
-    skin_centre = float(np.linalg.norm(pogo.U[0]) * 1e6)  # radii_mm starts at 0
-    assert pogo.center_amplitude_um > 5 * skin_centre  # the pins leave the skin centre alone
+    lay = build_problem(load_scene(POGO)).layout
+    nodes = pogo.domain.mesh.nodes
+    board = np.flatnonzero((nodes[:, 0] == 0) & np.isclose(nodes[:, 1], lay.contact_z))
+    assert lay.contact_z == pytest.approx(-2.4e-3)  # the pins hold the board 2.4 mm up
+    assert pogo.center_amplitude_um == pytest.approx(
+        float(np.linalg.norm(pogo.nodal[board[0]]) * 1e6))
+    assert pogo.center_amplitude_um != pytest.approx(float(np.linalg.norm(pogo.U[0]) * 1e6))
 
 
 def test_pogo_preload_check_reports_contact():
@@ -142,21 +147,39 @@ def test_skipped_unit_mass_and_rocking_change_the_model():
     assert motor.density == 0.0
     assert light.layout.rotor_z == light.layout.contact_z - 0.1e-3  # at the motor's base face
     assert full.layout.rotor_z < light.layout.rotor_z
-    assert simulate(scene_from_dict(scene_to_dict(light_scene := _scene(
-        GLUED, unit_mass=False)))).center_amplitude_um > 0 and light_scene.unit is not None
+    assert simulate(_scene(GLUED, unit_mass=False)).center_amplitude_um > 0
+
+
+def _contact(contact, example=POGO, **effects):
+    d = scene_to_dict(_scene(example, **effects))
+    d["unit"]["ring_contact"] = contact
+    return scene_from_dict(d)
 
 
 @pytest.mark.parametrize("effect", ["inertia", "unit_mass"])
 def test_unit_floating_on_frictionless_pins_needs_inertia(effect):
-    """Rings not bonded to the unit (the default gap) leave only its inertia holding it
-    sideways: switching that off is rejected, bonding the rings makes it well-posed."""
+    """Rings that do not touch the unit (ring_contact = "none") leave only its inertia holding
+    it sideways: switching that off is rejected; a ring contact makes it well-posed."""
     with pytest.raises(SceneError) as err:
-        build_problem(_scene(**{effect: False}))
-    assert err.value.field == f"effects.{effect}" and "ring_gap_mm" in str(err.value)
-    d = scene_to_dict(_scene(**{effect: False}))
-    d["unit"]["ring_gap_mm"] = 0.0
-    res = simulate(scene_from_dict(d))
-    assert np.isfinite(res.normalized_edge) and res.center_amplitude_um > 0
+        build_problem(_contact("none", **{effect: False}))
+    assert err.value.field == f"effects.{effect}" and "ring_contact" in str(err.value)
+    for contact in ("frictionless", "bonded"):
+        res = simulate(_contact(contact, **{effect: False}))
+        assert np.isfinite(res.normalized_edge) and res.center_amplitude_um > 0
+
+
+def test_frictionless_ring_contact_ties_only_the_radial_displacement():
+    res = simulate(load_scene(POGO))  # default: frictionless
+    p = build_problem(load_scene(POGO))
+    ring, core, comp = p.domain.ties[0]
+    assert comp == 0 and ring.size == core.size > 4
+    U = res.nodal
+    assert np.allclose(U[ring, 0], U[core, 0])  # u_r continuous across the slit
+    assert not np.allclose(U[ring, 1], U[core, 1])  # u_z free: no shear through the contact
+    none = simulate(_contact("none"))
+    bonded = simulate(_contact("bonded"))
+    assert bonded.edge_mm == pytest.approx(res.edge_mm - 0.05)  # no slit when bonded
+    assert len({round(x.normalized_edge, 3) for x in (res, none, bonded)}) == 3
 
 
 def test_glued_unit_builds_no_pin_operator():

@@ -62,12 +62,19 @@ def test_spin_up_runs_at_rated_speed_and_spin_down_rings_out(long_run):
     h = res.histories
     ux = h.u[:, len(scene.output.radii_mm), 0]  # centre, u_r of the theta = 0 meridian
     steady = _window(h, ON_MS - 50, ON_MS)
-    crossings = np.count_nonzero(np.diff(np.sign(ux[steady])) != 0)
-    assert crossings / 2 / 0.05 == pytest.approx(scene.unit.motor.rated_frequency_hz, rel=0.03)
+    def frequency_hz(window):
+        return np.count_nonzero(np.diff(np.sign(ux[window])) != 0) / 2 / (
+            h.t[window][-1] - h.t[window][0])
+
+    rated = scene.unit.motor.rated_frequency_hz
+    assert frequency_hz(steady) == pytest.approx(rated, rel=0.03)
     peak = np.abs(ux[steady]).max()
     assert np.abs(ux[h.t < 2e-3]).max() < 0.01 * peak  # the motor starts from rest
-    # 70 ms after switch-off (2 spin-down time constants) the force is below 2 % of rated
-    assert np.abs(ux[_window(h, OFF_MS - 10, OFF_MS)]).max() < 0.2 * peak
+    # after switch-off the speed falls through the unit's suspension resonance (the response
+    # first grows), then 40-70 ms later (1.1-2 spin-down time constants) it is slower and dying
+    assert frequency_hz(_window(h, OFF_MS - 30, OFF_MS)) < 0.5 * rated
+    spin_down = np.abs(ux[h.t > ON_MS * 1e-3]).max()
+    assert np.abs(ux[_window(h, OFF_MS - 10, OFF_MS)]).max() < 0.5 * spin_down
     assert "spin up" in res.meta["effects"] and res.meta["modes"] == [1]
 
 

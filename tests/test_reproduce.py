@@ -1,0 +1,187 @@
+"""`hapticrom reproduce`: the quick run writes a complete report whose numbers are what
+`simulate` returns, bad arguments exit 2 without writing, and the report helpers are exact on
+analytic inputs."""
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+from fem import reproduce as rp
+from fem.scene import load_scene, scene_from_dict, scene_to_dict
+from fem.simulate import simulate
+from hapticrom.cli import main
+
+FIGURES = ("structure.png", "single_layers.png", "triples.png", "sweeps.png")
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    parent = tmp_path_factory.mktemp("reproduce")
+    out = parent / "report"
+    assert main(["reproduce", "--out", str(out), "--quick", "--workers", "2"]) == 0
+    return parent, out, (out / "README.md").read_text()
+
+
+def _row(text: str, first_cells: str) -> list[str]:
+    """Cells of the first Markdown table row that starts with ``first_cells``."""
+    for line in text.splitlines():
+        if line.startswith(f"| {first_cells} |"):
+            return [c.strip() for c in line.strip("|").split("|")]
+    raise AssertionError(f"no table row starting with {first_cells!r}")
+
+
+def _percent(cell: str) -> float:
+    return float(cell.removesuffix("%").strip()) / 100
+
+
+def test_report_figures_and_json_exist_and_no_temporaries_remain(report):
+    parent, out, text = report
+    for name in FIGURES:
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+        assert f"({name})" in text  # linked from the report
+    def no_constants(name):
+        raise AssertionError(f"results.json is not strict JSON: {name}")
+
+    doc = json.loads((out / "results.json").read_text(), parse_constant=no_constants)
+    assert doc["solver_version"] == rp.SOLVER_VERSION and doc["run"]["quick"] is True
+    assert sorted(p.name for p in parent.iterdir()) == ["report"]
+
+
+def test_every_study_has_a_table_and_the_run_is_described(report):
+    _, _, text = report
+    titles = ["1. Motor orientation", "2. Pogo pins", "3. Single layers A-D",
+              "4. All ordered triples", "5. Density, modulus and Poisson's ratio",
+              "6. Context the paper has no FE number for", "Where we disagree"]
+    for a, b in zip(titles, [*titles[1:], None], strict=True):
+        start = text.index(f"## {a}")
+        section = text[start: text.index(f"## {b}") if b else len(text)]
+        assert "\n|---|" in section, a
+    for table in ("Table 2", "Table 3", "Table 4"):
+        assert table in text
+    assert rp.SOLVER_VERSION in text and "hapticrom reproduce" in text
+    assert re.search(r"wall time \d+\.\d s", text)
+    assert "Quick run" in text
+
+
+def test_single_layer_numbers_equal_an_independent_simulate(report):
+    """Single layer C, forward, glued, rebuilt here from the example without fem.reproduce."""
+    _, _, text = report
+    d = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-bare-forward.toml"))
+    d["unit"].update(orientation="forward", attachment="glued",
+                     encapsulation=["dragon-skin-10-medium"])
+    res = simulate(scene_from_dict(d))
+    cells = _row(text, "C | dragon-skin-10-medium")
+    centre, edge = float(cells[5]), float(cells[6])
+    assert centre == pytest.approx(res.center_amplitude_um, rel=5e-4)
+    assert edge == pytest.approx(res.edge_amplitude_um, rel=5e-4)
+    assert _percent(cells[7]) == pytest.approx(res.normalized_edge, abs=6e-4)
+    vertical = abs(res.edge[1]) * 1e6 / res.center_amplitude_um
+    assert _percent(cells[8]) == pytest.approx(vertical, abs=6e-4)
+
+
+def test_acd_appears_with_its_rank_consistent_with_the_ranked_table(report):
+    _, _, text = report
+    table = text[text.index("<details>"): text.index("</details>")]
+    rows = [[c.strip() for c in line.strip("|").split("|")]
+            for line in table.splitlines() if re.match(r"\| \d+ \|", line)]
+    ranks = [int(r[0]) for r in rows]
+    values = [_percent(r[4]) for r in rows]
+    assert ranks == list(range(1, len(rows) + 1)) and len(rows) == 4
+    assert values == sorted(values)
+    acd = next(r for r in rows if r[1] == "A-C-D")
+    claim = re.search(r"A-C-D ranks (\d+) of (\d+)", text)
+    assert claim and (int(claim[1]), int(claim[2])) == (int(acd[0]), len(rows))
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--workers", "0"], "--workers"),
+    (["--workers", "-3"], "--workers"),
+])
+def test_bad_workers_exit_2_and_write_nothing(tmp_path, capsys, args, message):
+    out = tmp_path / "report"
+    assert main(["reproduce", "--out", str(out), "--quick", *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "1 <= workers <= 256" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_missing_parent_directory_exits_2(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path / "no" / "report"), "--quick"]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_non_integer_workers_is_a_usage_error(tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", "--out", str(tmp_path / "r"), "--workers", "two"])
+    assert exc.value.code == 2
+
+
+def test_atomic_dir_replaces_whole_and_keeps_the_old_on_failure(tmp_path):
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / "stale.md").write_text("old")
+    rp._atomic_dir(out, lambda d: (d / "new.md").write_text("new"))
+    assert sorted(p.name for p in out.iterdir()) == ["new.md"]
+
+    def fail(d):
+        (d / "half.md").write_text("half")
+        raise RuntimeError("boom")
+
+    with pytest.raises(RuntimeError):
+        rp._atomic_dir(out, fail)
+    assert sorted(p.name for p in out.iterdir()) == ["new.md"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
+
+
+def _fake(edge_um: float = 1.0, centre_um: float = 1.0, profile=None, step_mm: float = 1.0):
+    """A Solved with given magnitudes (all motion in U_r) and an optional profile (fractions of
+    the centre amplitude)."""
+    profile = np.asarray([edge_um / centre_um] if profile is None else profile, dtype=float)
+    u = np.zeros((profile.size, 3), complex)
+    u[:, 0] = profile * centre_um * 1e-6
+    vec = np.array([1e-6, 0.0, 0.0], complex)
+    return rp.Solved(edge_mm=5.0, centre=centre_um * vec, edge=edge_um * vec,
+                     skin_axis=centre_um * vec, top_axis=centre_um * vec,
+                     profile_mm=np.arange(profile.size) * step_mm, profile=u,
+                     surface_r_mm=np.array([0.0, 5.0]), surface=np.array([centre_um * vec,
+                                                                          edge_um * vec]),
+                     wall_s=0.0, dofs=0)
+
+
+def test_crosstalk_distance_interpolates_the_last_crossing():
+    # 0.8 at the edge, falling 0.1 per mm, with a bump back above 0.5 at 4 mm
+    s = _fake(profile=[0.8, 0.7, 0.6, 0.45, 0.55, 0.4, 0.3, 0.2, 0.1])
+    assert rp.crosstalk_distance(s, 0.5) == pytest.approx(4.0 + 0.05 / 0.15)
+    assert rp.crosstalk_distance(s, 0.9) == 0.0
+    assert math.isinf(rp.crosstalk_distance(s, 0.05))
+
+
+def test_sweep_measures_recover_a_power_law_exactly():
+    """edge ~ rho^-0.3 E^0.2 (nu has no effect): the log-log sensitivities are the exponents,
+    the spreads are (x_max / x_min)^|p|, and the verdict ranks density first."""
+    def edge(rho, E, nu):
+        return rho**-0.3 * E**0.2
+
+    sweeps = {"density": rp.TABLE2_DENSITY, "E": rp.TABLE3_E_KPA, "nu": rp.TABLE4_NU}
+    r = {}
+    for name, values in sweeps.items():
+        c = rp._common_value(name)
+        for x in (*values, c * rp.ELASTICITY_STEP, c / rp.ELASTICITY_STEP):
+            point = rp._sweep_point(name, x)
+            r[rp.uniform_name(*point)] = _fake(edge_um=edge(*point), centre_um=1.0)
+    m = {name: rp.sweep_measures(r, name, values) for name, values in sweeps.items()}
+    assert m["density"]["edge_elasticity"] == pytest.approx(-0.3, abs=1e-9)
+    assert m["E"]["edge_elasticity"] == pytest.approx(0.2, abs=1e-9)
+    assert m["nu"]["edge_elasticity"] == pytest.approx(0.0, abs=1e-12)
+    assert m["density"]["edge_spread"] == pytest.approx(4.0**0.3)
+    assert m["E"]["edge_spread"] == pytest.approx(240.0**0.2)
+    assert m["density"]["edge_slope_over_range"] == pytest.approx(-0.3)
+    section = rp.study_sweeps(r, sweeps)
+    local = next(c for c in section.claims if "d ln(edge)" in c[0])
+    assert local[3] == "agrees" and local[2].startswith("density")
+    spread = next(c for c in section.claims if "edge amplitude max/min" in c[0])
+    assert spread[3] == "disagrees"  # 240^0.2 = 2.99 beats 4^0.3 = 1.52: the range decides
