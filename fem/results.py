@@ -43,12 +43,6 @@ def interpolate(stencil: tuple[NDArray, NDArray], nodal: NDArray) -> NDArray:
     return np.einsum("ki,kic->kc", weights, nodal[nodes])
 
 
-def surface_interpolator(domain: Domain, radii: NDArray, z: float = 0.0):
-    """Return f(nodal (n_nodes, 3)) -> (len(radii), 3) values at ``radii`` on the face at z."""
-    stencil = surface_stencil(domain, radii, z)
-    return lambda nodal: interpolate(stencil, nodal)
-
-
 def magnitude(U: NDArray) -> NDArray:
     """sqrt(|U_r|^2 + |U_z|^2 + |U_t|^2) of (..., 3) complex amplitudes (see module doc)."""
     return np.sqrt(np.sum(np.abs(U) ** 2, axis=-1))

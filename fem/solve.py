@@ -29,10 +29,6 @@ class OperatorLog:
         self.built.append(f"{name}[n={mode}]")
 
 
-def has_hysteresis(domain: Domain) -> bool:
-    return bool(np.any(domain.element_property("loss_factor") > 0))
-
-
 def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: OperatorLog,
                              volumetric: str = "bbar", stretch=None) -> NDArray:
     """K* - omega^2 M + i omega C per element: stiffness with hysteretic moduli E (1 + i eta),
@@ -217,12 +213,6 @@ def factorize(A: sp.spmatrix, many_solves: bool = False):
             pass
     return spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                      options={"SymmetricMode": True})
-
-
-def natural_frequencies(domain: Domain, mode: int, k: int = 6, sigma_hz: float = 0.0) -> NDArray:
-    """The k natural frequencies (Hz) of ``mode`` nearest ``sigma_hz`` (shift-invert Lanczos)."""
-    freqs, _ = natural_modes(domain, mode, k, sigma_hz)
-    return freqs
 
 
 def natural_modes(domain: Domain, mode: int, k: int = 6,
