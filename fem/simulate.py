@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from . import SOLVER_VERSION, results, time_domain
 from .domain import Domain
-from .problem import build_problem
+from .problem import build_problem, drive_omega
 from .scene import Scene
 from .solve import OperatorLog, solve_mode
 
@@ -200,7 +200,7 @@ def resolution_warning(scene: Scene, problem) -> str | None:
     some tissue layer (DESIGN.md sec. 2: 2 mm linear elements are only 7 per fat wavelength)."""
     if scene.analysis.kind == "static":
         return None
-    f = problem.omega / (2 * np.pi) if problem.omega else drive_frequency_hz(scene)
+    f = drive_omega(scene) / (2 * np.pi)
     need = 10.0 / scene.mesh.order  # elements per wavelength: 10 linear, 5 quadratic
     worst = None
     for ly in scene.tissue.layers:
@@ -217,12 +217,6 @@ def resolution_warning(scene: Scene, problem) -> str | None:
     return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
             f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g} and "
             f"order {scene.mesh.order}; {advice} (about 1 % error)")
-
-
-def drive_frequency_hz(scene: Scene) -> float:
-    if scene.analysis.kind == "transient" and scene.load.kind == "unit":
-        return scene.unit.motor.rated_frequency_hz
-    return scene.analysis.frequency_hz
 
 
 def pin_preload(problem, sol) -> dict:
