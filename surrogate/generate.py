@@ -42,13 +42,14 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from fem.parallel import one_blas_thread
 from surrogate.space import Space, SpaceError, load_space
 from surrogate.store import FEM_SOURCE, DatasetError, Store, solver_info, utc_now
 
@@ -63,9 +64,6 @@ __all__ = [
 ]
 
 _SCHEDULER_RE = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
-_THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
-
 
 class RunnerError(RuntimeError):
     """The execution backend failed (a worker process died, a Dask worker was lost).
@@ -326,21 +324,7 @@ class _DaskBackend:
             self.client.close()
 
 
-@contextlib.contextmanager
-def _one_blas_thread() -> Iterator[None]:
-    """Spawned workers inherit the environment: one BLAS thread each avoids oversubscribing
-    the cores and keeps floating-point reductions independent of the thread count."""
-    saved = {k: os.environ.get(k) for k in _THREAD_VARS}
-    for k in _THREAD_VARS:
-        os.environ.setdefault(k, "1")
-    try:
-        yield
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+
 
 
 # --------------------------------------------------------------------------- the runner
@@ -487,7 +471,7 @@ def _run(store: Store, space: Space, planned: list[Planned], stats: PlanStats,
         store.save_manifest()
         return report
     own_backend = backend is None
-    with _one_blas_thread() if own_backend else contextlib.nullcontext():
+    with one_blas_thread() if own_backend else contextlib.nullcontext():
         if own_backend:
             backend = _PoolBackend(workers or _cpu_count())
         report.backend, report.workers = backend.name, backend.workers

@@ -366,7 +366,7 @@ def profile_matrix(df: Any, grid_mm: Sequence[float],
 
 #: fem modules that cannot change a solution (reports, closed-form references): editing them
 #: must not mark a dataset as coming from another solver.
-NOT_SOLVER_SOURCES = frozenset({"reproduce.py", "analytic.py"})
+NOT_SOLVER_SOURCES = frozenset({"reproduce.py", "analytic.py", "parallel.py"})
 
 
 def solver_info(git: bool = True) -> dict[str, Any]:

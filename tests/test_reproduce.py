@@ -1,6 +1,6 @@
 """`hapticrom reproduce`: the quick run writes a complete report whose numbers are what
-`simulate` returns, bad arguments exit 2 without writing, and the report helpers are exact on
-analytic inputs."""
+`simulate` returns (also under every ring contact), whose narrative agrees with its own tables,
+bad arguments exit 2 without writing, and the report helpers are exact on analytic inputs."""
 
 import json
 import math
@@ -10,11 +10,13 @@ import numpy as np
 import pytest
 
 from fem import reproduce as rp
-from fem.scene import load_scene, scene_from_dict, scene_to_dict
+from fem.problem import resolve_effects
+from fem.scene import SceneError, Unit, load_scene, scene_from_dict, scene_to_dict
 from fem.simulate import simulate
 from hapticrom.cli import main
 
-FIGURES = ("structure.png", "single_layers.png", "triples.png", "sweeps.png")
+FIGURES = ("structure.png", "single_layers.png", "triples.png", "sweeps.png", "ring_contact.png")
+CONTACT = "### (g) How the inner ring meets the motor"
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +37,29 @@ def _row(text: str, first_cells: str) -> list[str]:
 
 def _percent(cell: str) -> float:
     return float(cell.removesuffix("%").strip()) / 100
+
+
+def _section(text: str, heading: str) -> str:
+    """From ``heading`` to the next heading of the same or a higher level."""
+    start = text.index(heading)
+    level = heading.split(" ")[0]
+    ends = [text.find(f"\n{h} ", start + 1) for h in ("#" * n for n in range(1, len(level) + 1))]
+    ends = [e for e in ends if e > 0]
+    return text[start: min(ends) if ends else len(text)]
+
+
+def _cell(cell: str) -> tuple[float, float, float]:
+    """'11.96 um: 124.4 % / 97.2 %' -> (centre um, normalized, normalized |U_z|)."""
+    m = re.fullmatch(r"([\d.]+) um: ([\d.]+) % / ([\d.]+) %", cell)
+    assert m, cell
+    return float(m[1]), float(m[2]) / 100, float(m[3]) / 100
+
+
+def _contact_columns(section: str) -> dict[str, int]:
+    """Ring contact -> column index in the (g) per-case table."""
+    header = next(line for line in section.splitlines() if line.startswith("| case |"))
+    cells = [c.strip() for c in header.strip("|").split("|")]
+    return {re.match(r"'(\w+)'", c)[1]: i for i, c in enumerate(cells) if c.startswith("'")}
 
 
 def test_report_figures_and_json_exist_and_no_temporaries_remain(report):
@@ -64,6 +89,8 @@ def test_every_study_has_a_table_and_the_run_is_described(report):
     assert rp.SOLVER_VERSION in text and "hapticrom reproduce" in text
     assert re.search(r"wall time \d+\.\d s", text)
     assert "Quick run" in text
+    section = _section(text, CONTACT)
+    assert section.count("\n|---|") >= 3  # per case, claims per contact, every reading
 
 
 def test_single_layer_numbers_equal_an_independent_simulate(report):
@@ -185,3 +212,132 @@ def test_sweep_measures_recover_a_power_law_exactly():
     assert local[3] == "agrees" and local[2].startswith("density")
     spread = next(c for c in section.claims if "edge amplitude max/min" in c[0])
     assert spread[3] == "disagrees"  # 240^0.2 = 2.99 beats 4^0.3 = 1.52: the range decides
+
+
+@pytest.mark.parametrize("contact", ["none", "bonded"])
+def test_ring_contact_cells_equal_an_independent_simulate(report, contact):
+    """Single layer B and A-C-D on pins under a non-default contact, rebuilt from the examples
+    without fem.reproduce, match the (g) table cell by cell."""
+    _, _, text = report
+    section = _section(text, CONTACT)
+    col = _contact_columns(section)[contact]
+    single = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-bare-forward.toml"))
+    single["unit"].update(orientation="forward", attachment="glued", ring_contact=contact,
+                          encapsulation=["ecoflex-00-50"])
+    triple = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-triple-reverse-pogo.toml"))
+    triple["unit"]["ring_contact"] = contact
+    for name, d in (("single/B", single), ("triple/ACD", triple)):
+        res = simulate(scene_from_dict(d))
+        centre, norm, norm_z = _cell(_row(section, name)[col])
+        assert centre == pytest.approx(res.center_amplitude_um, rel=5e-4), name
+        assert norm == pytest.approx(res.normalized_edge, abs=6e-4), name
+        assert norm_z == pytest.approx(abs(res.edge[1]) * 1e6 / res.center_amplitude_um,
+                                       abs=6e-4), name
+
+
+def test_contact_study_covers_acd_and_the_default_extremes(report):
+    """The follow-up adds the most restraining and most enhancing triples of section 4 (by
+    magnitude) to the contact study, and the default column repeats section 4's numbers."""
+    _, _, text = report
+    table = text[text.index("<details>"): text.index("</details>")]
+    ranked = [[c.strip() for c in line.strip("|").split("|")]
+              for line in table.splitlines() if re.match(r"\| \d+ \|", line)]
+    section = _section(text, CONTACT)
+    default = _contact_columns(section)[Unit().ring_contact]
+    assert f"'{Unit().ring_contact}' (our default)" in section
+    for row in (ranked[0], ranked[-1], next(r for r in ranked if r[1] == "A-C-D")):
+        name = "triple/" + row[1].replace("-", "")
+        centre, norm, _ = _cell(_row(section, name)[default])
+        assert (centre, norm) == (float(row[2]), _percent(row[4]))
+
+
+def test_the_literal_ties_are_reported_as_refused_by_the_solver(report):
+    """What the report says of 'none' on pins is what the solver does: it refuses a transient
+    (and a static solve) of the A-C-D unit, and accepts both for the other contacts."""
+    _, _, text = report
+    section = _section(text, CONTACT)
+    d = rp.scene_dict(rp.Case(rp.TRIPLE, rp.contact_edit("none"), transient=True))
+    with pytest.raises(SceneError) as err:
+        resolve_effects(scene_from_dict(d))
+    assert str(err.value) in section
+    posed = {re.match(r"\| '(\w+)'", line)[1]: line.split("|")[2].strip()
+             for line in section.splitlines() if re.match(r"\| '\w+' \(", line)}
+    assert posed["none"].startswith("no") and "static and transient" in posed["none"]
+    assert posed["frictionless"] == posed["bonded"] == "yes"
+    for contact in ("frictionless", "bonded"):
+        d = rp.scene_dict(rp.Case(rp.TRIPLE, rp.contact_edit(contact), transient=True))
+        resolve_effects(scene_from_dict(d))  # accepted
+
+
+def test_summary_names_the_reading_closest_to_the_paper_from_its_own_table(report):
+    """The summary's 'closest' statements name the (contact, reading) rows of (g)'s table
+    whose factors are nearest 1, with those rows' numbers and the right posedness."""
+    _, _, text = report
+    section = _section(text, CONTACT)
+    rows = {}
+    for line in section.splitlines():
+        m = re.match(r"\| '(\w+)' \| ([^|]+) \|", line)
+        if m and "x" in line.split("|")[-2]:
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            rows[(m[1], m[2].strip())] = {
+                "min": cells[3], "max": cells[4], "f_min": float(cells[6].lstrip("x")),
+                "f_max": float(cells[7].lstrip("x"))}
+    assert len(rows) == 24
+    summary = _section(text, "## Summary")
+
+    def off(f):
+        return max(f, 1 / f)
+
+    targets = {"19.0 %": lambda v: off(v["f_min"]), "90.0 %": lambda v: off(v["f_max"])}
+    for target, score in targets.items():
+        line = next(x for x in summary.splitlines() if f"Closest to the paper's {target}" in x
+                    or f"Closest to its {target}" in x)
+        m = re.search(r"\*ring contact '(\w+)'(?: \(our default\))?, ([^*]+)\*", line)
+        chosen = rows[(m[1], m[2])]
+        assert score(chosen) == pytest.approx(min(map(score, rows.values())), abs=0.006)
+        value = chosen["min"] if target == "19.0 %" else chosen["max"]
+        assert value in line
+        assert ("not physically posed" in line) == (m[1] == "none")
+
+
+def test_run_cases_adds_the_follow_up_once_its_needs_are_solved(monkeypatch):
+    """workers=1 with a stand-in solver: the follow-up sees exactly its needs, its cases are
+    solved and returned, and names that are one scene share one solve."""
+    calls = []
+
+    def fake_solve(d):
+        calls.append(d["unit"]["ring_contact"])
+        return _fake(edge_um=len(calls))
+
+    monkeypatch.setattr(rp, "solve_scene", fake_solve)
+    seen = []
+
+    def make(r):
+        seen.append(sorted(r))
+        return {"x/none": rp.triple_case("ACD", rp.contact_edit("none")),
+                "x/default": rp.triple_case("ACD", rp.contact_edit(Unit().ring_contact))}
+
+    cases = {"triple/ACD": rp.triple_case("ACD"), "single/A": rp.single_case("A")}
+    r = rp.run_cases(cases, 1, log=lambda _: None,
+                     follow=rp.FollowUp(("triple/ACD",), make))
+    assert seen == [["triple/ACD"]]
+    assert sorted(r) == ["single/A", "triple/ACD", "x/default", "x/none"]
+    assert r["x/default"] is r["triple/ACD"]  # the default contact is the same scene
+    assert len(calls) == 3 and calls.count("none") == 1
+    with pytest.raises(ValueError, match="not in the plan"):
+        rp.run_cases(cases, 1, log=lambda _: None, follow=rp.FollowUp(("triple/DDD",), make))
+
+
+def test_closest_readings_uses_a_symmetric_distance_from_the_paper():
+    """x0.5 and x2 are equally far from the paper; 'both' multiplies the two distances."""
+    def cell(f_min, f_max):
+        return {"f_min": f_min, "f_max": f_max, "min": ["AAA", 0.19 * f_min],
+                "max": ["DDD", 0.9 * f_max]}
+
+    table = {"a": {"r1": cell(0.5, 1.05), "r2": cell(1.9, 1.0)},
+             "b": {"r1": cell(1.1, 3.0), "r2": cell(1.6, 1.5)}}
+    best = rp.closest_readings(table)
+    assert (best["min"]["contact"], best["min"]["reading"]) == ("b", "r1")
+    assert (best["max"]["contact"], best["max"]["reading"]) == ("a", "r2")
+    # both: a/r1 2.1, a/r2 1.9, b/r1 3.3, b/r2 2.4
+    assert (best["both"]["contact"], best["both"]["reading"]) == ("a", "r2")
