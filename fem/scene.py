@@ -107,6 +107,17 @@ class SceneError(ValueError):
         self.field = field
 
 
+
+def _si(name: str, factor: float, doc: str = "") -> property:
+    """A read-only SI view of a field kept in the units of the file (``thickness_mm`` ->
+    ``thickness_m``): the field's value times ``factor``."""
+
+    def value(self: Any) -> float:
+        return getattr(self, name) * factor
+
+    return property(value, doc=doc or f"``{name}`` in SI units (x {factor:g}).")
+
+
 # --------------------------------------------------------------------------- dataclasses
 
 
@@ -124,13 +135,8 @@ class Layer:
     loss_factor: float = 0.0
     material: str | None = None
 
-    @property
-    def thickness_m(self) -> float:
-        return self.thickness_mm * 1e-3
-
-    @property
-    def E_Pa(self) -> float:
-        return self.E_kPa * 1e3
+    thickness_m = _si("thickness_mm", 1e-3)
+    E_Pa = _si("E_kPa", 1e3)
 
 
 @dataclass(frozen=True)
@@ -145,9 +151,7 @@ class Tissue:
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", tuple(self.layers))  # a list would be unhashable
 
-    @property
-    def radius_m(self) -> float:
-        return self.radius_mm * 1e-3
+    radius_m = _si("radius_mm", 1e-3)
 
     @property
     def depth_mm(self) -> float:
@@ -168,9 +172,7 @@ class Load:
     amplitude_Pa: float = 1000.0
     force_N: float = 1.0
 
-    @property
-    def radius_m(self) -> float:
-        return self.radius_mm * 1e-3
+    radius_m = _si("radius_mm", 1e-3)
 
     @property
     def fourier_mode(self) -> int:
@@ -194,9 +196,7 @@ class Ring:
     loss_factor: float = 0.0
     material: str | None = None
 
-    @property
-    def E_Pa(self) -> float:
-        return self.E_kPa * 1e3
+    E_Pa = _si("E_kPa", 1e3)
 
 
 @dataclass(frozen=True)
@@ -229,30 +229,12 @@ class Motor:
     tau_spinup_ms: float = 20.0
     tau_spindown_ms: float = 35.0
 
-    @property
-    def radius_m(self) -> float:
-        return self.diameter_mm * 0.5e-3
-
-    @property
-    def height_m(self) -> float:
-        return self.height_mm * 1e-3
-
-    @property
-    def mass_kg(self) -> float:
-        return self.mass_g * 1e-3
-
-    @property
-    def unbalance_kg_m(self) -> float:
-        """m e [kg m] (1 g mm = 1e-6 kg m)."""
-        return self.unbalance_g_mm * 1e-6
-
-    @property
-    def rotor_height_m(self) -> float:
-        return self.rotor_height_mm * 1e-3
-
-    @property
-    def E_Pa(self) -> float:
-        return self.E_kPa * 1e3
+    radius_m = _si("diameter_mm", 0.5e-3)
+    height_m = _si("height_mm", 1e-3)
+    mass_kg = _si("mass_g", 1e-3)
+    unbalance_kg_m = _si("unbalance_g_mm", 1e-6, "m e [kg m] (1 g mm = 1e-6 kg m).")
+    rotor_height_m = _si("rotor_height_mm", 1e-3)
+    E_Pa = _si("E_kPa", 1e3)
 
     @property
     def volume_m3(self) -> float:
@@ -268,13 +250,8 @@ class Motor:
         """Amplitude m e / M [m] of the free (unsupported) motor's circular vibration."""
         return self.unbalance_kg_m / self.mass_kg
 
-    @property
-    def tau_spinup_s(self) -> float:
-        return self.tau_spinup_ms * 1e-3
-
-    @property
-    def tau_spindown_s(self) -> float:
-        return self.tau_spindown_ms * 1e-3
+    tau_spinup_s = _si("tau_spinup_ms", 1e-3)
+    tau_spindown_s = _si("tau_spindown_ms", 1e-3)
 
     def force_N_at(self, frequency_hz: float) -> float:
         """Unbalance force amplitude m e (2 pi f)^2 [N] at spin frequency ``frequency_hz``."""
@@ -299,17 +276,9 @@ class Board:
         """False for ``thickness_mm = 0`` (motor taped straight to the skin)."""
         return self.thickness_mm > 0
 
-    @property
-    def thickness_m(self) -> float:
-        return self.thickness_mm * 1e-3
-
-    @property
-    def radius_m(self) -> float:
-        return self.diameter_mm * 0.5e-3
-
-    @property
-    def E_Pa(self) -> float:
-        return self.E_kPa * 1e3
+    thickness_m = _si("thickness_mm", 1e-3)
+    radius_m = _si("diameter_mm", 0.5e-3)
+    E_Pa = _si("E_kPa", 1e3)
 
 
 @dataclass(frozen=True)
@@ -325,21 +294,10 @@ class Pogo:
     travel_mm: float = 0.3
     tip_diameter_mm: float = 0.5
 
-    @property
-    def radius_m(self) -> float:
-        return self.radius_mm * 1e-3
-
-    @property
-    def length_m(self) -> float:
-        return self.length_mm * 1e-3
-
-    @property
-    def travel_m(self) -> float:
-        return self.travel_mm * 1e-3
-
-    @property
-    def tip_diameter_m(self) -> float:
-        return self.tip_diameter_mm * 1e-3
+    radius_m = _si("radius_mm", 1e-3)
+    length_m = _si("length_mm", 1e-3)
+    travel_m = _si("travel_mm", 1e-3)
+    tip_diameter_m = _si("tip_diameter_mm", 1e-3)
 
     @property
     def total_stiffness_N_m(self) -> float:
@@ -412,13 +370,8 @@ class Unit:
         rings = len(self.encapsulation) * self.ring_thickness_mm
         return self.core_radius_mm + self.ring_gap_mm + rings
 
-    @property
-    def core_radius_m(self) -> float:
-        return self.core_radius_mm * 1e-3
-
-    @property
-    def outer_radius_m(self) -> float:
-        return self.outer_radius_mm * 1e-3
+    core_radius_m = _si("core_radius_mm", 1e-3)
+    outer_radius_m = _si("outer_radius_mm", 1e-3)
 
     @property
     def ring_radii_mm(self) -> tuple[tuple[float, float], ...]:
@@ -435,9 +388,7 @@ class Unit:
             return m.rotor_height_mm
         return m.height_mm - m.rotor_height_mm
 
-    @property
-    def ring_thickness_m(self) -> float:
-        return self.ring_thickness_mm * 1e-3
+    ring_thickness_m = _si("ring_thickness_mm", 1e-3)
 
 
 #: Radial slit [mm] between a unit's core and its inner ring when they are not bonded: it keeps
@@ -489,13 +440,8 @@ class Analysis:
             object.__setattr__(self, "voltage_schedule", tuple(
                 tuple(pair) if isinstance(pair, list | tuple) else pair for pair in steps))
 
-    @property
-    def time_step_s(self) -> float:
-        return self.time_step_ms * 1e-3
-
-    @property
-    def duration_s(self) -> float:
-        return self.duration_ms * 1e-3
+    time_step_s = _si("time_step_ms", 1e-3)
+    duration_s = _si("duration_ms", 1e-3)
 
     @property
     def voltage_schedule_s(self) -> tuple[tuple[float, float], ...]:
@@ -531,13 +477,8 @@ class Output:
     def radii_m(self) -> tuple[float, ...]:
         return tuple(r * 1e-3 for r in self.radii_mm)
 
-    @property
-    def profile_step_m(self) -> float:
-        return self.profile_step_mm * 1e-3
-
-    @property
-    def profile_length_m(self) -> float:
-        return self.profile_length_mm * 1e-3
+    profile_step_m = _si("profile_step_mm", 1e-3)
+    profile_length_m = _si("profile_length_mm", 1e-3)
 
     @property
     def profile_distances_mm(self) -> tuple[float, ...]:
