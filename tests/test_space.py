@@ -132,17 +132,16 @@ def test_parse_path() -> None:
             parse_path(bad)
 
 
+def _probe_params(max_probes: int) -> list[dict]:
+    """Three probe radii written to output.radii_mm[i] and an n_probes list-length parameter."""
+    radii = [{"name": f"r{i}", "type": "continuous", "path": f"output.radii_mm[{i}]",
+              "low": 2.0 * i, "high": 2.0 * i + 1.0} for i in range(3)]
+    return [*radii, {"name": "n_probes", "type": "integer", "path": "output.radii_mm",
+                     "map": "list_length", "low": 1, "high": max_probes}]
+
+
 def test_list_length_truncates_and_lists_grow() -> None:
-    params = [
-        {"name": "r0", "type": "continuous", "path": "output.radii_mm[0]", "low": 0.0,
-         "high": 1.0},
-        {"name": "r1", "type": "continuous", "path": "output.radii_mm[1]", "low": 2.0,
-         "high": 3.0},
-        {"name": "r2", "type": "continuous", "path": "output.radii_mm[2]", "low": 4.0,
-         "high": 5.0},
-        {"name": "n_probes", "type": "integer", "path": "output.radii_mm", "map": "list_length",
-         "low": 1, "high": 3},
-    ]
+    params = _probe_params(max_probes=3)
     d = _space(params)
     d["base"]["output"] = {"radii_mm": [0.5]}
     space = space_from_dict(d)
@@ -232,16 +231,7 @@ def test_range_outside_the_scene_schema_names_parameter() -> None:
 
 def test_dead_parameter_is_reported() -> None:
     # r2 writes radii_mm[2], but n_probes never keeps more than 2 entries
-    params = [
-        {"name": "r0", "type": "continuous", "path": "output.radii_mm[0]", "low": 0.0,
-         "high": 1.0},
-        {"name": "r1", "type": "continuous", "path": "output.radii_mm[1]", "low": 2.0,
-         "high": 3.0},
-        {"name": "r2", "type": "continuous", "path": "output.radii_mm[2]", "low": 4.0,
-         "high": 5.0},
-        {"name": "n_probes", "type": "integer", "path": "output.radii_mm", "map": "list_length",
-         "low": 1, "high": 2},
-    ]
+    params = _probe_params(max_probes=2)
     with pytest.raises(SpaceError, match=r"'r2'.*never changes the resolved scene"):
         space_from_dict(_space(params))
 
