@@ -70,7 +70,8 @@ def _has_loss(scene: Scene) -> bool:
 
 
 def resolve_effects(scene: Scene) -> dict[str, bool]:
-    """Effect switches: the scene's explicit choices over what it contains."""
+    """Effect switches: the scene's explicit choices over what it contains. Every effect the
+    scene can have is on by default, except the pin preload check (on request only)."""
     kind, u = scene.load.kind, scene.unit
     erm = kind == "unit"
     available = {
@@ -89,8 +90,8 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
         asked = getattr(scene.effects, name)
         if asked and not possible:
             raise SceneError(f"effects.{name}", f"effects.{name} = true needs {needs}")
-        chosen[name] = possible if asked is None else bool(asked)
-    chosen["preload"] = bool(scene.effects.preload)  # an extra static solve: only on request
+        auto = possible and name != "preload"
+        chosen[name] = auto if asked is None else bool(asked)
     if scene.analysis.kind == "transient" and not chosen["inertia"]:
         raise SceneError("effects.inertia", "a transient analysis needs inertia = true")
     if u is not None and u.attachment == "pogo" and not chosen["pogo"]:
@@ -157,17 +158,16 @@ def build_problem(scene: Scene) -> Problem:
     analysis = scene.analysis.kind if dynamic else "static"
     omega = drive_omega(scene) if dynamic else 0.0
     spec, lay = None, None
+    r_breaks, blocks, z_breaks = [], (), ()
     if scene.load.kind in UNIT_KINDS:
         spec = unit_spec(scene, hyst)
         lay = unit.layout(spec, effects["encapsulation"], effects["unit_mass"], effects["rocking"])
-        domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
-                                scene.tissue.base, mesh_spec(scene), analysis,
-                                omega or drive_omega(scene), lay.r_breaks, lay.blocks,
-                                z_breaks=lay.z_breaks)
-    else:
-        breaks = [scene.load.radius_m] if scene.load.kind == "pressure_patch" else []
-        domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
-                                scene.tissue.base, mesh_spec(scene), analysis, omega, breaks)
+        r_breaks, blocks, z_breaks = lay.r_breaks, lay.blocks, lay.z_breaks
+    elif scene.load.kind == "pressure_patch":
+        r_breaks = [scene.load.radius_m]
+    domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side, scene.tissue.base,
+                            mesh_spec(scene), analysis, omega, r_breaks, blocks,
+                            z_breaks=z_breaks)
     if lay is not None and lay.contact_ties is not None:
         domain = replace(domain, ties=(ring_contact_ties(domain, *lay.contact_ties),))
     mode = _mode(scene)

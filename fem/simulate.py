@@ -19,6 +19,7 @@ from .domain import Domain
 from .problem import build_problem, drive_omega
 from .scene import Scene
 from .solve import OperatorLog, solve_mode
+from .unit import pin_contact_check
 
 
 @dataclass(frozen=True)
@@ -157,7 +158,9 @@ def simulate(scene: Scene) -> SimulationResult:
         nodal, n_dofs = sol.nodal(), sol.n_dofs
         vals = results.interpolate(stencil, nodal)
         if problem.effects["preload"]:
-            extras["preload"] = pin_preload(problem, sol)
+            extras["preload"] = pin_contact_check(problem.domain, problem.mode,
+                                                  problem.layout.pins, problem.unit.pogo,
+                                                  sol.u_full)
     wall = time.perf_counter() - t0
     included, skipped = problem.effect_lists()
     meta = {
@@ -217,16 +220,3 @@ def resolution_warning(scene: Scene, problem) -> str | None:
     return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
             f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g} and "
             f"order {scene.mesh.order}; {advice} (about 1 % error)")
-
-
-def pin_preload(problem, sol) -> dict:
-    """Check the linear pogo model: contact holds while the dynamic force of the most loaded
-    pin, k |compression amplitude|, stays below its preload k x travel."""
-    from .unit import pin_compression
-
-    pogo = problem.unit.pogo
-    dofs, b = pin_compression(problem.domain, problem.mode, problem.layout.pins)
-    force = pogo.stiffness * float(np.abs(b @ sol.u_full[dofs]))
-    preload = pogo.stiffness * pogo.travel
-    return {"preload_per_pin_N": preload, "dynamic_pin_force_N": force,
-            "contact_maintained": force < preload}

@@ -29,6 +29,13 @@ class OperatorLog:
         self.built.append(f"{name}[n={mode}]")
 
 
+def damping_layer_matrices(domain: Domain, g: elements.GaussData, mode: int,
+                           density: NDArray) -> NDArray:
+    """Element viscous matrices (N s/m) of the graded damping layer: c(r, z) rho N^T N."""
+    rate = domain.damping.rate(g.r, g.z) * density[:, None]
+    return elements.weighted_mass(g, mode, rate)
+
+
 def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: OperatorLog,
                              volumetric: str = "bbar", stretch=None) -> NDArray:
     """K* - omega^2 M + i omega C per element: stiffness with hysteretic moduli E (1 + i eta),
@@ -58,8 +65,7 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
         if omega > 0:
             Ze = Ze - omega**2 * elements.mass(g, mode, density[idx])
         if damped:
-            rate = domain.damping.rate(g.r, g.z) * density[idx, None]
-            Ze = Ze + 1j * omega * elements.weighted_mass(g, mode, rate)
+            Ze = Ze + 1j * omega * damping_layer_matrices(domain, g, mode, density[idx])
         Z[idx] = Ze
     log.add("stiffness", mode)
     if hysteretic:

@@ -25,7 +25,7 @@ from . import elements, motor
 from .assembly import assemble_matrix, assemble_vector, build_dofmap
 from .problem import Problem
 from .scene import Scene
-from .solve import OperatorLog
+from .solve import OperatorLog, damping_layer_matrices
 from .transient import solve_transient
 
 
@@ -71,8 +71,7 @@ def system_matrices(problem: Problem, omega_ref: float, log: OperatorLog):
         C = assemble_matrix(dm, Ke * (eta / omega_ref)[:, None, None])
         log.add("hysteretic damping (Rayleigh)", mode)
     if d.damping is not None:
-        rate = d.damping.rate(g.r, g.z) * density[:, None]
-        C_layer = assemble_matrix(dm, elements.weighted_mass(g, mode, rate))
+        C_layer = assemble_matrix(dm, damping_layer_matrices(d, g, mode, density))
         C = C_layer if C is None else C + C_layer
         log.add("damping layer", mode)
     return dm, K, M, C

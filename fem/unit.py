@@ -232,3 +232,14 @@ def _mean_weights(nodes: NDArray, weights: NDArray) -> tuple[NDArray, NDArray]:
     uniq, inv = np.unique(nodes.ravel(), return_inverse=True)
     w = np.bincount(inv, weights.ravel())
     return uniq, w / w.sum()
+
+
+def pin_contact_check(domain: Domain, mode: int, pins: PinRing, pogo: PogoSpec,
+                      u_full: NDArray) -> dict:
+    """Check the linear pogo model: contact holds while the dynamic force of the most loaded
+    pin, k |compression amplitude| (N), stays below its preload k x travel (N)."""
+    dofs, b = pin_compression(domain, mode, pins)
+    force = pogo.stiffness * float(np.abs(b @ u_full[dofs]))
+    preload = pogo.stiffness * pogo.travel
+    return {"preload_per_pin_N": preload, "dynamic_pin_force_N": force,
+            "contact_maintained": force < preload}

@@ -8,6 +8,7 @@ from fem.assembly import UR, UZ
 from fem.domain import Domain, Solid
 from fem.elements import circumferential_factor, gauss_data, lagrange_1d
 from fem.mesh import build_mesh
+from fem.scene import SceneError, scene_from_dict
 
 
 def half_space_solid(nu: float, mu: float = 1.0, density: float = 1.0) -> Solid:
@@ -45,3 +46,14 @@ def l2_relative_error(domain: Domain, nodal_ur: np.ndarray, exact) -> float:
     u_h = np.einsum("ga,ea->eg", g.N, nodal_ur[domain.mesh.elements])
     u_ex = exact(g.r)
     return float(np.sqrt(np.sum(g.weight * (u_h - u_ex) ** 2) / np.sum(g.weight * u_ex**2)))
+
+
+def assert_scene_error(d: dict, field: str, fragment: str) -> SceneError:
+    """``scene_from_dict(d)`` must fail on ``field`` with ``fragment`` in its message."""
+    import pytest
+
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(d)
+    assert info.value.field == field
+    assert fragment in str(info.value)
+    return info.value
