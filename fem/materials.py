@@ -49,10 +49,11 @@ class Material:
     source: str = ""
 
     def __post_init__(self) -> None:
-        # Thermodynamic admissibility: positive E and rho, -1 < nu < 0.5, eta >= 0.
+        # Thermodynamic admissibility: positive E, -1 < nu < 0.5, eta >= 0.
         checks = (
             ("E_Pa", self.E_Pa > 0, "E_Pa > 0"),
-            ("density_kg_m3", self.density_kg_m3 > 0, "density_kg_m3 > 0"),
+            # 0 is a massless solid: a part whose inertia is switched off (effects.unit_mass)
+            ("density_kg_m3", self.density_kg_m3 >= 0, "density_kg_m3 >= 0"),
             ("nu", -1.0 < self.nu < 0.5, "-1 < nu < 0.5"),
             ("loss_factor", self.loss_factor >= 0, "loss_factor >= 0"),
         )

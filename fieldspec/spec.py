@@ -23,6 +23,7 @@ __all__ = [
     "Spec",
     "allowed_text",
     "check_interval",
+    "is_bool",
     "read_array",
     "read_fields",
     "read_number",
@@ -149,18 +150,21 @@ def check_interval(value: float, spec: Spec, key: str, path: str, ctx: Context) 
         raise ctx.error(path, f"{path} = {value!r} is out of range: allowed {allowed}")
 
 
-def _is_bool(value: Any) -> bool:
-    # numpy booleans (from parameter sweeps) are booleans too; checked without importing numpy
-    return isinstance(value, bool) or type(value).__name__ == "bool_"
+def is_bool(value: Any) -> bool:
+    """Whether ``value`` is a boolean, numpy booleans (from parameter sweeps) included (checked
+    without importing numpy)."""
+    kind = type(value)
+    return isinstance(value, bool) or (kind.__module__ == "numpy"
+                                       and kind.__name__ in ("bool", "bool_"))
 
 
 def read_number(value: Any, kind: type, path: str, ctx: Context) -> float | int:
     """``value`` as ``kind`` (float or int). numbers.Real/Integral also admit numpy scalars;
     booleans are refused."""
     abc = numbers.Integral if kind is int else numbers.Real
-    if _is_bool(value) or not isinstance(value, abc):
+    if is_bool(value) or not isinstance(value, abc):
         what = "an integer" if kind is int else "a number (float or int)"
-        extra = " (true/false is not a number)" if _is_bool(value) else ""
+        extra = " (true/false is not a number)" if is_bool(value) else ""
         raise ctx.error(path, f"{path} = {value!r} has the wrong type: expected {what}, "
                         f"got {type(value).__name__}{extra}")
     try:
@@ -189,7 +193,7 @@ def read_value(value: Any, spec: Spec, key: str, path: str, ctx: Context) -> Any
                             f"got {type(value).__name__}")
         value = str(value)
     elif spec.kind is bool:
-        if not _is_bool(value):
+        if not is_bool(value):
             auto = " (leave the key out for auto)" if spec.default is None else ""
             raise ctx.error(path, f"{path} = {value!r} has the wrong type: expected true or "
                             f"false{auto}, got {type(value).__name__}")

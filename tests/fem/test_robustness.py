@@ -4,8 +4,8 @@ known limit or an invariance), not merely for the absence of NaN."""
 import numpy as np
 import pytest
 
+from fem import simulate
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 
 POGO = "examples/unit-triple-reverse-pogo.toml"
 FOREARM = "examples/forearm.toml"

@@ -1,15 +1,15 @@
 """Static verification against closed-form elasticity (DESIGN.md section 3)."""
 
+import analytic
 import numpy as np
 import pytest
 from fem_cases import half_space_solid, hollow_cylinder, inner_pressure_load, l2_relative_error
 
-from fem import analytic
+from fem import simulate
 from fem.assembly import UR, UT, UZ
 from fem.domain import MeshSpec, layered_domain
 from fem.loads import axis_point_force
 from fem.scene import scene_from_dict
-from fem.simulate import simulate
 from fem.solve import solve_mode
 
 SPEC = MeshSpec(near_size=0.01, near_radius=0.1, far_size=0.05, order=2)

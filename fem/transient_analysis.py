@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from . import elements, motor
 from .assembly import assemble_matrix, assemble_vector, build_dofmap
-from .problem import Problem
-from .scene import Scene
+from .problem import Problem, drive_omega
+from .scene import LoadKind, Scene
 from .solve import OperatorLog, damping_layer_matrices
 from .transient import solve_transient
 
@@ -81,17 +81,17 @@ def load_history(scene: Scene, problem: Problem):
     """Amplitude columns of the load pattern against time, and k."""
     a = scene.analysis
     u = scene.unit
-    if scene.load.kind == "unit":
+    if scene.load.kind == LoadKind.UNIT:
         m = u.motor
-        tau_up = m.tau_spinup_ms * 1e-3 if problem.effects["spin_up"] else 1e-9
-        tau_down = m.tau_spindown_ms * 1e-3 if problem.effects["spin_up"] else 1e-9
+        tau_up = m.tau_spinup_s if problem.effects["spin_up"] else 1e-9
+        tau_down = m.tau_spindown_s if problem.effects["spin_up"] else 1e-9
         erm = motor.ERMMotor(m.unbalance_kg_m, m.rated_voltage_V, m.rated_frequency_hz,
                              m.start_voltage_V, tau_up, tau_down,
                              max(4.5, float(np.max(np.abs([v for _, v in a.voltage_schedule])))))
-        schedule = motor.VoltageSchedule(tuple((t * 1e-3, v) for t, v in a.voltage_schedule))
+        schedule = motor.VoltageSchedule(a.voltage_schedule_s)
         return motor.erm_load_history(erm, schedule), 2
     # a normal actuator: force amplitude follows the voltage schedule, relative to rated voltage
-    starts = np.array([t for t, _ in a.voltage_schedule]) * 1e-3
+    starts = np.array([t for t, _ in a.voltage_schedule_s])
     level = np.array([v for _, v in a.voltage_schedule]) / u.motor.rated_voltage_V
     w = 2 * np.pi * a.frequency_hz
 
@@ -107,8 +107,7 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
     """Integrate the scene's transient and sample it with ``stencil`` (nodes, weights) at the
     points whose radii (m) are ``radii``."""
     a = scene.analysis
-    omega_ref = 2 * np.pi * (scene.unit.motor.rated_frequency_hz if scene.load.kind == "unit"
-                             else a.frequency_hz)
+    omega_ref = drive_omega(scene)
     dm, K, M, C = system_matrices(problem, omega_ref, log)
     nodes, weights = stencil
     used = np.unique(nodes)
@@ -119,7 +118,7 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
 
     history, k = load_history(scene, problem)
     f = assemble_vector(dm, problem.load)
-    dt = a.time_step_ms * 1e-3
+    dt = a.time_step_s
     n_steps = max(1, round(a.duration_ms / a.time_step_ms))
     res = solve_transient(M, K, np.repeat(f[:, None], k, axis=1), history, dt, n_steps, C=C,
                           rho_inf=a.rho_inf, record_dofs=record,

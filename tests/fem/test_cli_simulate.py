@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
+from fem import simulate
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 from hapticrom.cli import main
 
 EXAMPLE = "examples/forearm.toml"

@@ -1,6 +1,8 @@
 """The haptic unit as an axisymmetric model: motor, flexible PCB, silicone rings and pogo pins.
 
-Modelling assumptions (each a choice the paper leaves open; PAPER.md, DESIGN.md sec. 5):
+The unit is described by the scene's dataclasses (``fem.scene.Unit`` and its parts), whose SI
+views this module uses directly. Modelling assumptions (each a choice Guo et al. 2025 leave
+open):
 
 * **Motor.** The coin ERM housing is a solid cylinder of an effectively rigid material whose
   density spreads the motor's mass over its volume. The unbalance force F = m e omega^2 acts on
@@ -29,12 +31,12 @@ Modelling assumptions (each a choice the paper leaves open; PAPER.md, DESIGN.md 
   tying the radial displacement across a 0.05 mm slit over the core's height; "bonded" cast
   around the motor (shared nodes); "none" no interaction. With "none" and pogo pins nothing
   but its inertia holds the unit sideways: a transient drifts, a static solve is singular.
-* **Centre and edge.** The centre amplitude is the unit's own vibration where it meets the skin:
+* **Center and edge.** The center amplitude is the unit's own vibration where it meets the skin:
   the displacement on the axis of its skin-side face (the skin under it when glued, the
   board's underside on pogo pins, where the skin on the axis is untouched). The edge is the
   unit's outer radius (the outermost ring, or the motor/board without rings); the edge
   amplitude is the skin-surface amplitude there, and the profile runs outwards from it.
-  Normalized edge = edge / centre.
+  Normalized edge = edge / center.
 
 All quantities SI (m, kg, N, Pa) unless a name says otherwise.
 """
@@ -47,64 +49,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .assembly import UZ
-from .domain import Block, Domain, Solid
+from .domain import Block, Domain
 from .elements import dofs_per_node
 from .loads import face_integrals
-
-
-@dataclass(frozen=True)
-class MotorSpec:
-    radius: float
-    height: float
-    mass: float
-    unbalance: float  # m e, kg m
-    rotor_height: float  # above the base face
-    E: float
-    nu: float
-
-
-@dataclass(frozen=True)
-class PogoSpec:
-    count: int
-    radius: float
-    stiffness: float  # per pin, N/m
-    length: float
-    travel: float
-    tip_diameter: float
-
-
-@dataclass(frozen=True)
-class UnitSpec:
-    """A haptic unit in SI units. ``rings`` are Solids, inner to outer."""
-
-    motor: MotorSpec
-    orientation: str
-    attachment: str
-    board_thickness: float
-    board_radius: float
-    board: Solid
-    rings: tuple[Solid, ...]
-    ring_thickness: float
-    pogo: PogoSpec | None = None
-    ring_gap: float = 0.0
-    ring_contact: str = "bonded"
-
-    @property
-    def core_radius(self) -> float:
-        """Radius of the motor-and-board core the rings wrap."""
-        return max(self.motor.radius, self.board_radius if self.board_thickness > 0 else 0.0)
-
-    @property
-    def ring_start(self) -> float:
-        """Inner radius of the inner ring (m): the core plus the gap that keeps them unbonded."""
-        return self.core_radius + self.ring_gap
-
-    @property
-    def outer_radius(self) -> float:
-        """The unit's edge (m)."""
-        if not self.rings:
-            return self.core_radius
-        return self.ring_start + len(self.rings) * self.ring_thickness
+from .scene import Pogo, Unit
 
 
 @dataclass(frozen=True)
@@ -136,9 +84,9 @@ class UnitLayout:
         blocks: rectangles to paint above the skin (motor, board, rings).
         r_breaks, z_breaks: extra cell lines (m).
         rotor_z: depth of the rotor plane on the axis (m, negative).
-        centre_z: depth of the motor's centre on the axis (m).
+        center_z: depth of the motor's center on the axis (m).
         contact_z: depth of the unit's skin-side face (m): 0 when glued, the board's underside
-            on pogo pins. Its centre is the unit's "centre amplitude".
+            on pogo pins. Its center is the unit's "center amplitude".
         pins: the smeared pogo pins, or None when glued.
         edge: the unit's outer radius (m).
         contact_ties: (r_core, r_ring, z_top, z_bottom) of a frictionless ring contact: the
@@ -149,15 +97,15 @@ class UnitLayout:
     r_breaks: tuple[float, ...]
     z_breaks: tuple[float, ...]
     rotor_z: float
-    centre_z: float
+    center_z: float
     contact_z: float
     pins: PinRing | None
     edge: float
     contact_ties: tuple[float, float, float, float] | None = None
 
 
-def layout(unit: UnitSpec, encapsulation: bool = True, unit_mass: bool = True,
-           rocking: bool = True) -> UnitLayout:
+def layout(unit: Unit, encapsulation: bool = True, unit_mass: bool = True,
+           rocking: bool = True, hysteretic: bool = True) -> UnitLayout:
     """Place the unit's parts above the skin (z = 0, z positive into the tissue).
 
     Args:
@@ -165,44 +113,39 @@ def layout(unit: UnitSpec, encapsulation: bool = True, unit_mass: bool = True,
         unit_mass: give the motor and board their mass (off: massless housing).
         rocking: apply the unbalance at the rotor plane (off: at the motor's lower face, i.e.
             without the overturning moment).
+        hysteretic: keep the rings' loss factors (off: purely elastic rings).
     """
-    m = unit.motor
-    gap = unit.pogo.length if unit.attachment == "pogo" else 0.0
-    z_board_bottom = -gap
-    z_motor_bottom = z_board_bottom - unit.board_thickness
-    z_motor_top = z_motor_bottom - m.height
-    flipped = unit.orientation == "reverse"
-    rotor_above_base = m.height - m.rotor_height if flipped else m.rotor_height
-    rotor_z = z_motor_bottom - rotor_above_base if rocking else z_motor_bottom
+    m, board = unit.motor, unit.board
+    pogo = unit.attachment == "pogo"
+    z_board_bottom = -unit.pogo.length_m if pogo else -0.0
+    z_motor_bottom = z_board_bottom - board.thickness_m
+    z_motor_top = z_motor_bottom - m.height_m
+    rotor_z = z_motor_bottom - unit.rotor_above_base_m if rocking else z_motor_bottom
 
-    density = m.mass / (np.pi * m.radius**2 * m.height) if unit_mass else 0.0
-    motor = Solid(m.E, m.nu, density, 0.0, "motor")
-    blocks = [Block(0.0, m.radius, z_motor_top, z_motor_bottom, motor)]
-    if unit.board_thickness > 0:
-        board = unit.board if unit_mass else Solid(unit.board.E, unit.board.nu, 0.0, 0.0, "pcb")
-        blocks.append(Block(0.0, unit.board_radius, z_motor_bottom, z_board_bottom, board))
-    r_in = unit.ring_start
+    blocks = [Block(0.0, m.radius_m, z_motor_top, z_motor_bottom, m.solid(unit_mass))]
+    if board.present:
+        blocks.append(Block(0.0, board.radius_m, z_motor_bottom, z_board_bottom,
+                            board.board_solid(unit_mass)))
+    r_in = unit.ring_start_m
     if encapsulation:
-        for i, ring in enumerate(unit.rings):
-            r0 = r_in + i * unit.ring_thickness
-            blocks.append(Block(r0, r0 + unit.ring_thickness, z_motor_top, 0.0, ring))
+        for ring, (r0, r1) in zip(unit.encapsulation, unit.ring_radii_m, strict=True):
+            blocks.append(Block(r0, r1, z_motor_top, 0.0, ring.solid(hysteretic)))
 
-    r_breaks = [m.radius, unit.core_radius, r_in, unit.outer_radius]
+    r_breaks = [m.radius_m, unit.core_radius_m, r_in, unit.outer_radius_m]
     pins = None
-    if unit.attachment == "pogo":
+    if pogo:
         p = unit.pogo
-        half = 0.5 * p.tip_diameter
-        r_breaks += [p.radius - half, p.radius + half]
-        pins = PinRing(p.radius, half, z_board_bottom, p.count * p.stiffness)
-    z_breaks = (z_motor_top, z_motor_bottom, z_board_bottom, rotor_z, 0.5 * (z_motor_top
-                                                                            + z_motor_bottom))
-    contact_z = z_board_bottom if unit.board_thickness > 0 else z_motor_bottom
+        half = 0.5 * p.tip_diameter_m
+        r_breaks += [p.radius_m - half, p.radius_m + half]
+        pins = PinRing(p.radius_m, half, z_board_bottom, p.total_stiffness_N_m)
+    center_z = 0.5 * (z_motor_top + z_motor_bottom)
+    z_breaks = (z_motor_top, z_motor_bottom, z_board_bottom, rotor_z, center_z)
+    contact_z = z_board_bottom if board.present else z_motor_bottom
     ties = None
-    if encapsulation and unit.rings and unit.ring_contact == "frictionless":
-        ties = (unit.core_radius, r_in, z_motor_top, contact_z)
+    if encapsulation and unit.encapsulation and unit.ring_contact == "frictionless":
+        ties = (unit.core_radius_m, r_in, z_motor_top, contact_z)
     return UnitLayout(tuple(blocks), tuple(r_breaks), tuple(sorted(set(z_breaks))), rotor_z,
-                      0.5 * (z_motor_top + z_motor_bottom), contact_z, pins,
-                      unit.outer_radius, ties)
+                      center_z, contact_z, pins, unit.outer_radius_m, ties)
 
 
 def pin_compression(domain: Domain, mode: int, pins: PinRing) -> tuple[NDArray, NDArray]:
@@ -234,12 +177,12 @@ def _mean_weights(nodes: NDArray, weights: NDArray) -> tuple[NDArray, NDArray]:
     return uniq, w / w.sum()
 
 
-def pin_contact_check(domain: Domain, mode: int, pins: PinRing, pogo: PogoSpec,
+def pin_contact_check(domain: Domain, mode: int, pins: PinRing, pogo: Pogo,
                       u_full: NDArray) -> dict:
     """Check the linear pogo model: contact holds while the dynamic force of the most loaded
     pin, k |compression amplitude| (N), stays below its preload k x travel (N)."""
     dofs, b = pin_compression(domain, mode, pins)
-    force = pogo.stiffness * float(np.abs(b @ u_full[dofs]))
-    preload = pogo.stiffness * pogo.travel
+    force = pogo.stiffness_N_m * float(np.abs(b @ u_full[dofs]))
+    preload = pogo.preload_N
     return {"preload_per_pin_N": preload, "dynamic_pin_force_N": force,
             "contact_maintained": force < preload}

@@ -4,10 +4,9 @@ and the step size stays stable and accurate from very small to very large."""
 import numpy as np
 import pytest
 
-from fem import results
+from fem import results, simulate
 from fem.problem import build_problem
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 from fem.solve import solve_mode
 
 EXAMPLE = "examples/unit-transient.toml"

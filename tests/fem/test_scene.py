@@ -33,7 +33,7 @@ from fem.scene import (
     scene_to_dict,
 )
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "forearm.toml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "forearm.toml"
 
 # PAPER.md, Table 1 reading: name, thickness [mm], E [kPa], density [kg/m3], nu.
 PAPER_FOREARM = [

@@ -5,18 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 from fem.assembly import UR, UZ
-from fem.domain import Domain, Solid
+from fem.domain import Domain
 from fem.elements import circumferential_factor, gauss_data, lagrange_1d
+from fem.materials import Material
 from fem.mesh import build_mesh
 from fem.scene import SceneError, scene_from_dict
 
 
-def half_space_solid(nu: float, mu: float = 1.0, density: float = 1.0) -> Solid:
-    return Solid(2.0 * mu * (1.0 + nu), nu, density)
+def half_space_solid(nu: float, mu: float = 1.0, density: float = 1.0) -> Material:
+    return Material("half-space", 2.0 * mu * (1.0 + nu), density, nu)
 
 
 def hollow_cylinder(a: float, b: float, length: float, n_r: int, n_z: int, order: int,
-                    solid: Solid) -> Domain:
+                    solid: Material) -> Domain:
     """Plane-strain thick cylinder a < r < b, 0 < z < length, u_z = 0 on both ends."""
     mesh = build_mesh(np.linspace(a, b, n_r + 1), np.linspace(0.0, length, n_z + 1),
                       np.zeros((n_z, n_r), dtype=int), order)

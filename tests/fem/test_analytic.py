@@ -1,4 +1,4 @@
-"""Checks of the closed-form references in fem.analytic against each other and known limits.
+"""Checks of the closed-form references in analytic.py against each other and known limits.
 
 Nothing here calls the FE solver. Independent evidence comes from: finite-difference checks of
 the Navier equations, traction-free surfaces and load resultants; quadrature of the point-load
@@ -9,12 +9,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import analytic as an
 import numpy as np
 import pytest
 from scipy import integrate
 from scipy.linalg import eigh
-
-from fem import analytic as an
 
 MU, NU = 1.3e3, 0.3  # Pa, -; arbitrary but not 1 so wrong mu powers show up
 Field = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -24,7 +23,7 @@ Field = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
 def _cerruti_cartesian(x, y, z, Q, mu, nu):
-    """Johnson (1985) ch. 3 Cerruti field, transcribed independently of fem.analytic."""
+    """Johnson (1985) ch. 3 Cerruti field, transcribed independently of tests/fem/analytic.py."""
     rho = np.sqrt(x**2 + y**2 + z**2)
     c, k = Q / (4 * np.pi * mu), 1 - 2 * nu
     u_x = c * (1 / rho + x**2 / rho**3 + k * (1 / (rho + z) - x**2 / (rho * (rho + z) ** 2)))

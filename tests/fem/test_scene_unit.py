@@ -33,7 +33,7 @@ from fem.scene import (
     scene_to_dict,
 )
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 UNIT_EXAMPLES = sorted(EXAMPLES.glob("unit-*.toml"))
 SILICONES = ["ecoflex-00-10", "ecoflex-00-50", "dragon-skin-10-medium", "dragon-skin-30"]
 
