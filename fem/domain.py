@@ -1,6 +1,6 @@
 """The discretised body: mesh, materials per element, absorbers and boundary conditions.
 
-This layer knows SI quantities only; ``fem.simulate`` translates a scene into it. A domain is the
+This layer knows SI quantities only; ``fem.problem`` translates a scene into it. A domain is the
 layered tissue (top to bottom, z = 0 at the skin surface, z positive into the body) out to a
 radius R, optionally with rectangles painted above the skin (a haptic unit), and whatever the
 outer side and base need (``fem.absorbers``).

@@ -2,8 +2,9 @@
 
 Values are kept in the file's units (mm, kPa, g, ms) so that a scene written back is the scene
 read (exact round trips, stable hashes); each SI quantity the solver needs is a read-only view
-defined once here (``thickness_m``, ``E_Pa``, ``unbalance_kg_m``, ``solid`` ...). Derived unit
-geometry (core and outer radius, rotor plane, pin preload) is defined here and nowhere else.
+defined once (``thickness_m``, ``E_Pa``, ``solid()`` ...; helpers in ``fem.scene.si``). The
+haptic unit's dataclasses and its derived geometry (core and outer radius, rotor plane, pin
+preload) are in ``fem.scene.unit_model``.
 Constructing a :class:`Scene` validates it (see ``fem.scene.validate``).
 """
 

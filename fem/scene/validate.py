@@ -160,7 +160,7 @@ def _check_unit_geometry(unit: Unit, ctx: Context) -> None:
         # blame the part that sets the size: the rings, else the motor or the board
         if n:
             where = "unit.encapsulation"
-        elif core == 0.5 * unit.motor.diameter_mm:
+        elif unit.core_radius_m == unit.motor.radius_m:
             where = "unit.motor.diameter_mm"
         else:
             where = "unit.board.diameter_mm"

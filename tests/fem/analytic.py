@@ -145,7 +145,7 @@ def uniform_pressure_surface(r: ArrayLike, p: float, a: float, mu: float, nu: fl
     Johnson (1985) ch. 3, pressure on a circular region, eqs 3.27-3.28 (with E = 2 mu (1+nu)):
         r <= a: u_z = 4(1-nu^2) p a E(r/a) / (pi E),
         r >  a: u_z = 4(1-nu^2) p r [E(a/r) - (1 - a^2/r^2) K(a/r)] / (pi E),
-    complete elliptic integrals of modulus k. Centre w0 = p a (1-nu)/mu, edge 2 w0/pi.
+    complete elliptic integrals of modulus k. Center w0 = p a (1-nu)/mu, edge 2 w0/pi.
     """
     _check_disc(a, mu, nu)
     (r,) = _check_coords(r=r)
@@ -179,7 +179,7 @@ def uniform_shear_surface(
     over the disc. With phi, psi from `_disc_potentials` (dx^2/s^3 = 1/s - d^2 s/dx^2):
         U_r = q/(2 pi mu) [(1-nu) phi + nu psi],   U_t = q/(2 pi mu) [-phi + nu psi],
         U_z = (1-2nu) q r/(4 mu) inside,   (1-2nu) q a^2/(4 mu r) outside.
-    Centre: U_r = -U_t = (2-nu) q a/(2 mu); far field: the Cerruti solution with Q = q pi a^2.
+    Center: U_r = -U_t = (2-nu) q a/(2 mu); far field: the Cerruti solution with Q = q pi a^2.
     Verified against quadrature of `cerruti` in tests/test_analytic.py.
     """
     _check_disc(a, mu, nu)
@@ -357,8 +357,8 @@ APSEL_TABLE = HarmonicPointLoadTable(
 )
 """Harmonic point load table, nu = 1/3, stated accuracy about 0.005.
 
-Source: Wong (1975), Caltech EERL 75-01; Apsel (1979), UCSD PhD thesis, Table 5.1; transcribed
-from DESIGN.md sec. 3. r0 = omega r / c_S; entries mu r u / P; time factor e^{+i omega t}.
+Source: Wong (1975), Caltech EERL 75-01; Apsel (1979), UCSD PhD thesis, Table 5.1.
+r0 = omega r / c_S; entries mu r u / P; time factor e^{+i omega t}.
 Horizontal entries are the Fourier amplitudes for a horizontal unit load in x: u_r = U_r
 cos(theta), u_theta = U_t sin(theta). Static limits (r0 -> 0): U_z = (1-nu)/(2 pi),
 U_r = -(1-2nu)/(4 pi) (vertical); U_r = 1/(2 pi), U_t = -(1-nu)/(2 pi) (horizontal).

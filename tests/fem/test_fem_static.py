@@ -1,4 +1,5 @@
-"""Static verification against closed-form elasticity (DESIGN.md section 3)."""
+"""Static verification against closed-form elasticity (Boussinesq, Cerruti, Lame; Johnson 1985,
+Contact Mechanics, ch. 3; Timoshenko & Goodier 1970)."""
 
 import analytic
 import numpy as np
@@ -79,7 +80,7 @@ def test_uniform_pressure_patch_on_half_space_through_the_static_far_field(nu):
     res = simulate(scene)
     mu = 100e3 / (2 * (1 + nu))
     exact = analytic.uniform_pressure_surface(res.r_mm * 1e-3, 1000.0, 2e-3, mu, nu)
-    assert np.allclose(res.U[:, 1].real, exact, rtol=0.01)  # centre, inside, edge, outside
+    assert np.allclose(res.U[:, 1].real, exact, rtol=0.01)  # center, inside, edge, outside
     assert "static far field (side)" in res.meta["effects"]
 
 

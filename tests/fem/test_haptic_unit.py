@@ -73,7 +73,7 @@ def test_smeared_pins_keep_total_and_rocking_stiffness_of_three_pins():
     assert rocking == pytest.approx(discrete, rel=0.01)  # footprint averaging: < 1 %
 
 
-def test_glued_unit_centre_is_the_skin_and_pogo_centre_is_the_board():
+def test_glued_unit_center_is_the_skin_and_pogo_center_is_the_board():
     glued = simulate(load_scene("examples/unit-bare-forward.toml"))
     skin = simulate(scene_from_dict({**scene_to_dict(load_scene(
         "examples/unit-bare-forward.toml")), "output": {"radii_mm": [0.0]}}))

@@ -59,7 +59,7 @@ def test_steady_amplitude_of_a_long_transient_matches_the_harmonic_solve(long_ru
 def test_spin_up_runs_at_rated_speed_and_spin_down_rings_out(long_run):
     scene, res = long_run
     h = res.histories
-    ux = h.u[:, len(scene.output.radii_mm), 0]  # centre, u_r of the theta = 0 meridian
+    ux = h.u[:, len(scene.output.radii_mm), 0]  # center, u_r of the theta = 0 meridian
     steady = _window(h, ON_MS - 50, ON_MS)
     def frequency_hz(window):
         return np.count_nonzero(np.diff(np.sign(ux[window])) != 0) / 2 / (

@@ -17,14 +17,14 @@ from fem.materials import (
     material_from_fields,
 )
 
-# Guo et al. 2025 Table 1 as read in PAPER.md: E [kPa], density [kg/m3], nu.
+# Guo et al. 2025 (Biomimetics 10:597) Table 1: E [kPa], density [kg/m3], nu.
 PAPER_TISSUE = {
     "skin": (49.0, 1116.0, 0.47),
     "subcutaneous": (10.0, 1116.0, 0.47),
     "muscle": (53.0, 1116.0, 0.47),
     "bone": (2.94e6, 2000.0, 0.32),
 }
-# Smooth-On datasheets (DESIGN.md section 4): specific gravity, 100 % modulus [kPa],
+# Smooth-On datasheets: specific gravity, 100 % modulus [kPa],
 # and the two published small-strain E estimates [kPa].
 DATASHEET = {
     "ecoflex-00-10": (1.04, 55.0, 95.0, 21.0),
@@ -120,7 +120,7 @@ def test_elastic_identities() -> None:
 
 
 def test_wave_speeds_match_design_notes() -> None:
-    # DESIGN.md 2: skin (49 kPa, nu 0.47, 1116 kg/m3) has c_S about 3.8 m/s.
+    # skin (49 kPa, nu 0.47, 1116 kg/m3): c_S = sqrt(E / (2 (1 + nu) rho)), about 3.8 m/s.
     assert get_material("skin").shear_speed_m_s == pytest.approx(3.8, rel=0.03)
     # ... and c_P / c_S is about 7 at nu = 0.49.
     m = get_material("A")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +12,7 @@ import pytest
 from fem_cases import assert_scene_error
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scene_cases import assert_round_trips
 
 from fem.materials import MATERIALS
 from fem.scene import (
@@ -35,7 +35,8 @@ from fem.scene import (
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "forearm.toml"
 
-# PAPER.md, Table 1 reading: name, thickness [mm], E [kPa], density [kg/m3], nu.
+# Guo et al. 2025 (Biomimetics 10:597), Table 1 as read here: name, thickness [mm], E [kPa],
+# density [kg/m3], nu.
 PAPER_FOREARM = [
     ("skin", 1.9, 49.0, 1116.0, 0.47),
     ("subcutaneous", 14.0, 10.0, 1116.0, 0.47),
@@ -50,14 +51,6 @@ def _layer(**kw: Any) -> dict[str, Any]:
 
 def _scene(**tables: dict[str, Any]) -> dict[str, Any]:
     return copy.deepcopy(tables)
-
-
-def _round_trips(scene: Scene) -> None:
-    assert scene_from_dict(scene_to_dict(scene)) == scene
-    text = dump_scene_toml(scene)
-    back = scene_from_dict(tomllib.loads(text))
-    assert back == scene
-    assert scene_hash(back) == scene_hash(scene)
 
 
 # ----------------------------------------------------------------------------- defaults
@@ -99,7 +92,7 @@ def test_example_file() -> None:
     assert s.tissue.layers == scene_from_dict({}).tissue.layers
     assert s.analysis == Analysis("harmonic", 120.0)
     assert s.load.direction == "tangential"
-    _round_trips(s)
+    assert_round_trips(s)
     for line in EXAMPLE.read_text().splitlines():
         assert not line.strip() or "#" in line, f"uncommented line: {line!r}"
 
@@ -126,7 +119,7 @@ def test_round_trip_custom_scene() -> None:
     assert unnamed.name == "layer2"
     assert s.output.radii_mm == (20.0, 0.0, 3.5)  # stored as given, not sorted
     assert isinstance(s.analysis.frequency_hz, float) and isinstance(s.mesh.order, int)
-    _round_trips(s)
+    assert_round_trips(s)
 
 
 def test_to_dict_is_toml_shaped_and_complete() -> None:
@@ -154,7 +147,7 @@ def test_transient_analysis_round_trip() -> None:
         0.0, 3.0, 6.0, 9.0)
     assert len(Output(profile_step_mm=0.1, profile_length_mm=1.0).profile_distances_mm) == 11
     assert "voltage_schedule = [[0.0, 3.0], [10.5, -3.3], [20.0, 0.0]]" in dump_scene_toml(s)
-    _round_trips(s)
+    assert_round_trips(s)
     # a directly built analysis with lists is stored hashable, and validated
     direct = Scene(s.tissue, analysis=Analysis("transient", voltage_schedule=[[0, 1], [5, 2]]))
     assert direct.analysis.voltage_schedule == ((0, 1), (5, 2))
@@ -173,7 +166,7 @@ def test_effects_round_trip_and_hash() -> None:
     assert s.effects == Effects(inertia=False, rocking=True, spin_up=True)
     assert scene_to_dict(s)["effects"] == {"inertia": False, "rocking": True, "spin_up": True}
     assert "[effects]\ninertia = false\nrocking = true" in dump_scene_toml(s)
-    _round_trips(s)
+    assert_round_trips(s)
     hashes = {scene_hash(scene_from_dict({"effects": e}))
               for e in ({}, {"pogo": True}, {"pogo": False}, {"preload": True})}
     assert len(hashes) == 4  # auto, on and off are three different scenes
@@ -238,7 +231,7 @@ schedules = st.lists(
 def test_random_schedules_round_trip(schedule: list[list[float]]) -> None:
     s = scene_from_dict({"analysis": {"kind": "transient", "voltage_schedule": schedule}})
     assert s.analysis.voltage_schedule == tuple((float(t), float(v)) for t, v in schedule)
-    _round_trips(s)
+    assert_round_trips(s)
 
 
 @settings(max_examples=150, deadline=None)
@@ -250,7 +243,7 @@ def test_random_valid_layers_round_trip(layer_dicts: list[dict], radii: list[flo
             if key != "material":
                 assert getattr(layer, key) == value
     assert s.output.radii_mm == tuple(float(r) for r in radii)
-    _round_trips(s)
+    assert_round_trips(s)
 
 
 # ----------------------------------------------------------------------------- errors

@@ -72,3 +72,19 @@ def test_array_of_tables_paths_and_count():
         read_array([], "box", ctx, lambda *a: None, count=(1, 2), noun="boxes")
     with pytest.raises(FieldError, match="expected an array of tables"):
         read_array({}, "box", ctx, lambda *a: None)
+
+
+def test_toml_writer_round_trips_through_tomllib():
+    import tomllib
+
+    from fieldspec.toml import dumps, toml_value
+
+    tables = {"box": {"name": 'a "q"\n\x01', "n": 3, "x": 1e-05, "ok": True, "xs": [1.0, 2.5],
+                      "inner": {"k": 1}, "item": [{"a": 1}, {"a": 2}]}}
+    text = dumps(tables, {"box": "item"}, header="written by a test")
+    assert text.startswith("# written by a test\n")
+    assert tomllib.loads(text) == tables
+    with pytest.raises(ValueError, match="non-finite"):
+        toml_value(float("inf"))
+    with pytest.raises(TypeError):
+        toml_value(object())
