@@ -12,9 +12,11 @@ import pytest
 
 from fem.scene import scene_from_dict, scene_hash
 from hapticrom.cli import main
-from surrogate.ingest import ingest_profile, ingest_table, read_profile_csv
-from surrogate.space import SpaceError, space_from_dict
-from surrogate.store import FEM_SOURCE, DatasetError, Store, validate_dataset
+from surrogate.data.errors import DatasetError
+from surrogate.data.ingest import ingest_profile, ingest_table, read_profile_csv
+from surrogate.data.inspect import validate_dataset
+from surrogate.data.space import SpaceError, space_from_dict
+from surrogate.data.store import FEM_SOURCE, Store
 
 BASE = {"analysis": {"kind": "harmonic", "frequency_hz": 120.0},
         "mesh": {"near_size_mm": 1.0, "far_size_mm": 4.0, "order": 1},
@@ -136,7 +138,7 @@ def test_profile_exports_are_read_with_their_units(tmp_path: Path) -> None:
     ("d (mm),a (um)\n0,1\n1,-2\n", "negative amplitude"),
     ("d (mm),a (um)\n0,1\n0,2\n", "repeated distance"),
     ("d (mm),a (um)\n0,1\n1,nan\n", "NaN or inf"),
-    ("d (furlong),a (um)\n0,1\n1,2\n", "--distance-unit"),
+    ("d (furlong),a (um)\n0,1\n1,2\n", "distance_unit"),
 ])
 def test_bad_profiles_are_rejected(tmp_path: Path, text: str, message: str) -> None:
     p = tmp_path / "p.csv"
@@ -207,15 +209,15 @@ def test_table_columns_and_assignments(tmp_path: Path) -> None:
         ingest_table(table, tmp_path / "ds", _space(), values={"frequency_hz": "120"})
     table.write_text("skin_E_kPa,side,center_amplitude_um,edge_amplitude_um,normalized_edge\n"
                      "49,fixed,4,1,0.5\n")
-    with pytest.raises(DatasetError, match=r"normalized_edge = 0.5 but edge/centre = 0.25"):
+    with pytest.raises(DatasetError, match=r"normalized_edge = 0.5 but edge/center = 0.25"):
         ingest_table(table, tmp_path / "ds", _space(), values={"frequency_hz": "120"})
-    with pytest.raises(DatasetError, match="give --space to create it"):
+    with pytest.raises(DatasetError, match="give a space to create it"):
         ingest_table(table, tmp_path / "ds")
     assert not (tmp_path / "ds").exists()
 
 
 def test_profile_ingest_into_a_generated_dataset(tmp_path: Path) -> None:
-    from surrogate.generate import generate, plan_samples
+    from surrogate.data.generate import generate, plan_samples
 
     space = _space()
     out = tmp_path / "ds"
@@ -267,7 +269,7 @@ def test_cli_ingest(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert "expected NAME=VALUE" in capsys.readouterr().err
     assert main([*bad, "--distance-unit", "parsec", "--set", "skin_E_kPa=50", "--set",
                  "frequency_hz=130", "--set", "side=fixed"]) == 2
-    assert "--distance-unit = 'parsec'" in capsys.readouterr().err
+    assert "distance_unit = 'parsec'" in capsys.readouterr().err
     assert not (tmp_path / "new").exists()
 
 

@@ -10,7 +10,7 @@ Two inputs:
 Columns: every free parameter of the space (a parameter missing from the file may be given
 once for all rows with ``values``/``--set NAME=VALUE``; fixed parameters are optional and
 must equal their value), and any of ``center_amplitude_um``, ``edge_amplitude_um``,
-``normalized_edge`` (checked against edge/centre when all three are given), ``profile_file``
+``normalized_edge`` (checked against edge/center when all three are given), ``profile_file``
 (a profile CSV, path relative to the table), ``wall_s`` [s] and ``dofs``. Each row needs an
 amplitude or a profile. Lines starting with ``#`` are comments. Unknown columns are an error.
 
@@ -20,7 +20,7 @@ header). Delimiters ``,`` ``;`` tab or blanks; non-numeric lines before the data
 headers, the last one names the columns. Units come from the header (``(mm)``, ``[m]``,
 ``(um)``/``(µm)``) or from ``distance_unit``/``amplitude_unit`` (ABAQUS writes none: give
 them). The parameter values of the run are given with ``values``. The edge amplitude is the
-profile interpolated at distance 0 (None if 0 lies outside the data); the centre amplitude
+profile interpolated at distance 0 (None if 0 lies outside the data); the center amplitude
 can be given separately.
 
 Every value is checked against the space (ranges, choices, constraints) and every row's
@@ -44,8 +44,10 @@ from typing import Any
 
 import numpy as np
 
-from surrogate.space import Space, SpaceError, load_space
-from surrogate.store import DatasetError, Store, solver_info
+from surrogate.data.errors import DatasetError
+from surrogate.data.provenance import solver_info
+from surrogate.data.space import Space, SpaceError, load_space
+from surrogate.data.store import Store, new_manifest
 
 __all__ = [
     "AMPLITUDE_UNITS",
@@ -88,14 +90,14 @@ def _unit(header_field: str | None, given: str | None, table: Mapping[str, float
           what: str, path: Path) -> float:
     if given is not None:
         if given not in table:
-            raise DatasetError(f"--{what}-unit", f"--{what}-unit = {given!r}: allowed "
+            raise DatasetError(f"{what}_unit", f"{what}_unit = {given!r}: allowed "
                                f"{', '.join(table)}")
         return table[given]
     m = _UNIT_RE.search(header_field or "")
     if m and m.group(1) in table:
         return table[m.group(1)]
-    raise DatasetError(f"--{what}-unit", f"{path}: the unit of the {what} column is not in "
-                       f"the header ({header_field!r}); give --{what}-unit "
+    raise DatasetError(f"{what}_unit", f"{path}: the unit of the {what} column is not in "
+                       f"the header ({header_field!r}); give {what}_unit "
                        f"({', '.join(table)})")
 
 
@@ -138,7 +140,7 @@ def read_profile_csv(path: str | Path, distance_unit: str | None = None,
                            f"({sorted(width)})")
     ncol = width.pop()
     if max(columns) >= ncol or min(columns) < 0:
-        raise DatasetError("--columns", f"{path}: --columns {columns[0]},{columns[1]} but the "
+        raise DatasetError("columns", f"{path}: columns = {columns[0]},{columns[1]} but the "
                            f"data has {ncol} columns (0..{ncol - 1})")
     header = header or last_comment
     names = header if header and len(header) == ncol else [None] * ncol
@@ -177,13 +179,13 @@ def _open_target(out: str | Path, space: Space | str | Path | None) -> tuple[Sto
     if Store.exists(out):
         store = Store.open(out)
         if space is not None and space.space_hash() != store.manifest.get("space_hash"):
-            raise DatasetError("--space", f"--space {space.name!r} differs from the space of "
-                               f"{out}; omit --space to use the dataset's own")
+            raise DatasetError("space", f"space {space.name!r} differs from the space of {out}; "
+                               "give no space to use the dataset's own")
         return store, space or store.space
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise DatasetError("--out", f"--out {out} exists and is not a hapticrom dataset")
+        raise DatasetError("out", f"{out} exists and is not a hapticrom dataset")
     if space is None:
-        raise DatasetError("--space", f"{out} does not exist yet: give --space to create it")
+        raise DatasetError("space", f"{out} does not exist yet: give a space to create it")
     return None, space
 
 
@@ -222,8 +224,6 @@ def _strip(value: Any) -> Any:
 
 def _write(out: Path, store: Store | None, space: Space, rows: list[dict[str, Any]],
            source: str, n_read: int) -> IngestReport:
-    from surrogate.generate import _new_manifest
-
     if store is not None:
         keys, _ = store.keys()
         fresh = [r for r in rows if (source, r["sample_id"]) not in keys]
@@ -231,7 +231,7 @@ def _write(out: Path, store: Store | None, space: Space, rows: list[dict[str, An
         fresh = rows
     if fresh:
         if store is None:
-            store = Store.create(out, space, **_new_manifest(space, solver_info()))
+            store = Store.create(out, space, **new_manifest(space, solver_info()))
         with store.lock():
             store.remove_temp_files()
             store.write_part(fresh, {"source": source})
@@ -265,31 +265,31 @@ def ingest_profile(path: str | Path, out: str | Path, values: Mapping[str, Any],
     the design point ``values`` (parameter name -> value) to dataset ``out``."""
     path, out = Path(path), Path(out)
     store, space = _open_target(out, space)
-    _unknown(values, space, "--set")
+    _unknown(values, space, "values")
     where = str(path)
     vals = _check_values(space, values, where)
     dist, amp = read_profile_csv(path, distance_unit, amplitude_unit, columns)
     sid, scene_json = _scene_row(space, vals, where)
-    centre = None
+    center = None
     if center_amplitude_um is not None:
-        centre = _float_or_none(str(center_amplitude_um), where, "center_amplitude_um")
+        center = _float_or_none(str(center_amplitude_um), where, "center_amplitude_um")
     edge = _edge_from_profile(dist, amp)
     src = f"ingest:{source or path.name}"
-    row = {**vals, **_amplitudes(centre, edge, None, where), "sample_id": sid,
+    row = {**vals, **_amplitudes(center, edge, None, where), "sample_id": sid,
            "sample_index": 0, "status": "ok", "source": src, "scene_json": scene_json,
            "profile_distance_mm": dist.tolist(), "profile_magnitude_um": amp.tolist()}
     return _write(out, store, space, [row], src, 1)
 
 
-def _amplitudes(centre: float | None, edge: float | None, norm: float | None,
+def _amplitudes(center: float | None, edge: float | None, norm: float | None,
                 where: str) -> dict[str, Any]:
-    if centre is not None and edge is not None and centre > 0:
-        ratio = edge / centre
+    if center is not None and edge is not None and center > 0:
+        ratio = edge / center
         if norm is not None and not math.isclose(norm, ratio, rel_tol=1e-3, abs_tol=1e-9):
             raise DatasetError("normalized_edge", f"{where}: normalized_edge = {norm!r} but "
-                               f"edge/centre = {ratio:.6g}")
+                               f"edge/center = {ratio:.6g}")
         norm = ratio
-    return {"center_amplitude_um": centre, "edge_amplitude_um": edge, "normalized_edge": norm}
+    return {"center_amplitude_um": center, "edge_amplitude_um": edge, "normalized_edge": norm}
 
 
 def _unknown(given: Mapping[str, Any], space: Space, what: str) -> None:
@@ -309,7 +309,7 @@ def ingest_table(path: str | Path, out: str | Path, space: Space | str | Path | 
     path, out = Path(path), Path(out)
     store, space = _open_target(out, space)
     values = dict(values or {})
-    _unknown(values, space, "--set")
+    _unknown(values, space, "values")
     header, records = _read_table(path)
     allowed = set(space.names) | set(_OUTPUT_COLUMNS)
     for col in header:
@@ -362,7 +362,7 @@ def _table_row(space: Space, rec: Mapping[str, Any], path: Path, where: str,
                profile_opts: tuple[Any, Any, tuple[int, int]]) -> dict[str, Any]:
     vals = _check_values(space, {k: v for k, v in rec.items() if k in space.names}, where)
     sid, scene_json = _scene_row(space, vals, where)
-    centre = _float_or_none(rec.get("center_amplitude_um"), where, "center_amplitude_um")
+    center = _float_or_none(rec.get("center_amplitude_um"), where, "center_amplitude_um")
     edge = _float_or_none(rec.get("edge_amplitude_um"), where, "edge_amplitude_um")
     norm = _float_or_none(rec.get("normalized_edge"), where, "normalized_edge")
     row: dict[str, Any] = {**vals, "sample_id": sid, "scene_json": scene_json,
@@ -374,10 +374,10 @@ def _table_row(space: Space, rec: Mapping[str, Any], path: Path, where: str,
         dist, amp = read_profile_csv(path.parent / pfile, *profile_opts)
         row["profile_distance_mm"], row["profile_magnitude_um"] = dist.tolist(), amp.tolist()
         edge = edge if edge is not None else _edge_from_profile(dist, amp)
-    if centre is None and edge is None and not pfile:
+    if center is None and edge is None and not pfile:
         raise DatasetError(str(path), f"{where}: no result: give center_amplitude_um, "
                            "edge_amplitude_um or profile_file")
-    row.update(_amplitudes(centre, edge, norm, where))
+    row.update(_amplitudes(center, edge, norm, where))
     return row
 
 
@@ -388,9 +388,9 @@ def parse_assignments(items: Sequence[str]) -> dict[str, str]:
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
-            raise DatasetError("--set", f"--set {item!r}: expected NAME=VALUE")
+            raise DatasetError("set", f"{item!r}: expected NAME=VALUE")
         if name.strip() in out:
-            raise DatasetError("--set", f"--set {name.strip()} given twice")
+            raise DatasetError("set", f"{name.strip()} given twice")
         out[name.strip()] = value.strip()
     return out
 

@@ -12,18 +12,11 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from surrogate.space import space_from_dict
-from surrogate.store import (
-    FEM_SOURCE,
-    MANIFEST_NAME,
-    DatasetError,
-    Store,
-    arrow_schema,
-    merge_datasets,
-    profile_matrix,
-    solver_info,
-    validate_dataset,
-)
+from surrogate.data.errors import DatasetError
+from surrogate.data.inspect import merge_datasets, validate_dataset
+from surrogate.data.provenance import FINGERPRINT_SCENES, same_solver, solver_info
+from surrogate.data.space import space_from_dict
+from surrogate.data.store import FEM_SOURCE, MANIFEST_NAME, Store, arrow_schema, profile_matrix
 
 SPACE = {
     "space": {"name": "store-test", "seed": 1},
@@ -96,8 +89,8 @@ def test_round_trip_through_one_line_of_pandas(tmp_path: Path) -> None:
 
 
 def test_reserved_names_are_exactly_the_store_columns() -> None:
-    from surrogate.space import RESERVED_COLUMNS
-    from surrogate.store import OUTPUT_FIELDS, PROVENANCE_FIELDS
+    from surrogate.data.parameters import RESERVED_COLUMNS
+    from surrogate.data.store import OUTPUT_FIELDS, PROVENANCE_FIELDS
 
     assert {f.name for f in PROVENANCE_FIELDS + OUTPUT_FIELDS} == RESERVED_COLUMNS
 
@@ -224,11 +217,36 @@ def test_merge_refuses_mixed_solvers_and_other_columns(tmp_path: Path) -> None:
         merge_datasets(tmp_path / "m", [a.path])
 
 
-def test_solver_info_identifies_the_installed_solver() -> None:
+def test_solver_info_identifies_the_installed_solver_by_its_numbers() -> None:
     import fem
 
     info = solver_info()
     assert info["version"] == fem.SOLVER_VERSION
-    assert len(info["source_sha256"]) == 64 and info["hash"] == info["source_sha256"][:12]
+    assert len(info["fingerprint"]) == 64 and info["hash"] == info["fingerprint"][:12]
     assert info["git_revision"] == "unknown" or len(info["git_revision"].split("+")[0]) == 40
-    assert solver_info()["source_sha256"] == info["source_sha256"]
+    assert solver_info(git=False)["fingerprint"] == info["fingerprint"]
+    assert len(FINGERPRINT_SCENES) >= 3
+
+
+def test_solver_fingerprint_changes_with_the_physics(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A change of what the solver computes changes the fingerprint; the cache is per process,
+    so recompute it with a modified default material."""
+    from fem import materials
+    from surrogate.data import provenance
+
+    before = provenance.solver_fingerprint()
+    provenance.solver_fingerprint.cache_clear()
+    scenes = [dict(s) for s in provenance.FINGERPRINT_SCENES]
+    scenes[1] = {**scenes[1], "analysis": {"kind": "harmonic", "frequency_hz": 151.0}}
+    monkeypatch.setattr(provenance, "FINGERPRINT_SCENES", tuple(scenes))
+    try:
+        assert provenance.solver_fingerprint() != before
+    finally:
+        provenance.solver_fingerprint.cache_clear()
+    assert materials  # the library the fingerprint scenes resolve through
+
+
+def test_old_manifests_compare_by_source_hash() -> None:
+    old = {"version": "0.1.0", "source_sha256": "ab" * 32}
+    assert same_solver(old, dict(old))
+    assert not same_solver(old, {"version": "0.1.0", "fingerprint": "cd" * 32})

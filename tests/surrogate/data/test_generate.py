@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import dataclasses
 import json
 import os
 import signal
@@ -21,11 +22,15 @@ import pytest
 from fem.scene import scene_from_dict, scene_hash
 from fem.simulate import simulate
 from hapticrom.cli import main
-from surrogate.generate import generate, plan_samples, run_sample
-from surrogate.space import SpaceError, space_from_dict
-from surrogate.store import FEM_SOURCE, MANIFEST_NAME, DatasetError, Store, validate_dataset
+from surrogate.data.errors import DatasetError
+from surrogate.data.generate import generate
+from surrogate.data.inspect import validate_dataset
+from surrogate.data.plan import plan_samples
+from surrogate.data.space import SpaceError, space_from_dict
+from surrogate.data.store import FEM_SOURCE, MANIFEST_NAME, Store
+from surrogate.data.worker import run_sample
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 # Coarse, cheap scenes (about 20 ms each): the tests check bookkeeping, not accuracy.
 SPACE: dict[str, Any] = {
     "space": {"name": "gen-test", "seed": 5},
@@ -161,18 +166,14 @@ def test_failed_samples_are_stored_with_their_error(tmp_path: Path,
 
     real = fem.simulate.simulate
 
-    class NaNResult:
-        def __init__(self, res: Any) -> None:
-            self.res = res
-
-        def to_dict(self) -> dict[str, Any]:
-            return {**self.res.to_dict(), "center_amplitude_um": float("nan")}
+    def nan_result(res: Any) -> Any:
+        return dataclasses.replace(res, center=res.center * np.nan)
 
     def flaky(scene: Any) -> Any:
         f = scene.analysis.frequency_hz
         if f > 200.0:
             raise ValueError(f"synthetic failure at {f:.3f} Hz")
-        return NaNResult(real(scene)) if f < 120.0 else real(scene)
+        return nan_result(real(scene)) if f < 120.0 else real(scene)
 
     monkeypatch.setattr(fem.simulate, "simulate", flaky)
     space = space_from_dict(SPACE)
@@ -216,10 +217,10 @@ def test_resume_refuses_other_space_or_solver(tmp_path: Path) -> None:
     with pytest.raises(DatasetError, match="different space"):
         generate(space_from_dict(other), 5, out, workers=1, progress=False)
     m = json.loads((out / MANIFEST_NAME).read_text())
-    m["solver"]["source_sha256"] = "0" * 64
+    m["solver"]["fingerprint"] = "0" * 64
     m["solver_history"] = [m["solver"]]
     (out / MANIFEST_NAME).write_text(json.dumps(m))
-    with pytest.raises(DatasetError, match="--allow-solver-change"):
+    with pytest.raises(DatasetError, match="allow_solver_change"):
         generate(space_from_dict(SPACE), 5, out, workers=1, progress=False)
     assert sorted(p.name for p in out.iterdir()) == before
     rep = generate(space_from_dict(SPACE), 5, out, workers=1, progress=False,
@@ -284,11 +285,11 @@ def _bad_space(tmp_path: Path, change: dict[str, Any]) -> Path:
 
 
 @pytest.mark.parametrize("change, message", [
-    ({"low": 5.0, "high": 5.0}, "empty range low = 5.0, high = 5.0"),
+    ({"low": 5.0, "high": 5.0}, "(fat_thickness_mm).high = 5.0 is out of range"),
     ({"path": "tissue.layer[1].thick_mm"}, "'fat_thickness_mm' = 9.0 (path "
                                            "'tissue.layer[1].thick_mm')"),
     ({"low": -3.0}, "tissue.layer[1].thickness_mm"),
-    ({"type": "cont"}, "type = 'cont': allowed continuous"),
+    ({"type": "cont"}, "type = 'cont' is not allowed: choose one of 'continuous'"),
 ])
 def test_cli_bad_space_exit_2_and_nothing_written(tmp_path: Path, change: dict[str, Any],
                                                   message: str,
@@ -347,12 +348,13 @@ def test_workers_running_another_solver_are_refused(tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     from distributed import LocalCluster
 
-    import surrogate.generate as gen
+    import surrogate.data.generate as gen
+    import surrogate.data.worker as worker
 
-    monkeypatch.setattr(gen, "_worker_solver_hash", lambda: "f" * 64)
+    monkeypatch.setattr(worker, "worker_solver_hash", lambda: "f" * 64)
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
                       host="127.0.0.1", dashboard_address=None) as cluster, \
-            pytest.raises(gen.RunnerError, match="a worker runs solver source ffffffffffff"):
+            pytest.raises(gen.RunnerError, match="a worker runs solver ffffffffffff"):
         generate(space_from_dict(SPACE), 3, tmp_path / "d", scheduler=cluster.scheduler_address,
                  progress=False)
     assert Store.open(tmp_path / "d").parts() == []  # nothing from the foreign solver
