@@ -11,6 +11,7 @@ from typing import Any
 
 from fieldspec import REQUIRED, Spec
 
+from ..materials import get_material
 from .model import (
     EFFECT_NAMES,
     Analysis,
@@ -45,12 +46,12 @@ def _from_model(cls: type, specs: dict[str, Spec]) -> dict[str, Spec]:
 # The forearm of Guo et al. 2025 (Biomimetics 10:597), Table 1. The paper states a 31.9 mm
 # block, which fits none of the ways to split Table 1's digits; this reading
 # (1.9 + 14 + 21 + 5 = 41.9 mm) keeps the plausible layer thicknesses and is a documented choice.
-DEFAULT_FOREARM_LAYERS: tuple[Layer, ...] = (
-    Layer("skin", 1.9, 49.0, 1116.0, 0.47, 0.0, "skin"),
-    Layer("subcutaneous", 14.0, 10.0, 1116.0, 0.47, 0.0, "subcutaneous"),
-    Layer("muscle", 21.0, 53.0, 1116.0, 0.47, 0.0, "muscle"),
-    Layer("bone", 5.0, 2.94e6, 2000.0, 0.32, 0.0, "bone"),
-)
+# The moduli, densities and Poisson's ratios are the library's (``fem.materials``, same source).
+DEFAULT_FOREARM_THICKNESS_MM = (("skin", 1.9), ("subcutaneous", 14.0), ("muscle", 21.0),
+                                ("bone", 5.0))
+DEFAULT_FOREARM_LAYERS: tuple[Layer, ...] = tuple(
+    Layer(m.name, thickness, m.E_Pa / 1e3, m.density_kg_m3, m.nu, m.loss_factor, m.name)
+    for m, thickness in ((get_material(name), t) for name, t in DEFAULT_FOREARM_THICKNESS_MM))
 
 LAYER = _from_model(Layer, {
     "name": Spec(str, None),  # default: the material name, else "layer<i>"
