@@ -24,8 +24,8 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Solve, print the summary, write the requested outputs (each atomically)."""
+    from fem import simulate
     from fem.scene import load_scene
-    from fem.simulate import simulate
 
     for opt in _OUTPUTS:
         out = getattr(args, opt)

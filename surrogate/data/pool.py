@@ -63,7 +63,7 @@ def _init_worker(parent_pid: int) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
-    import fem.simulate  # noqa: F401 - import the solver once per worker, not per task
+    import fem.simulation  # noqa: F401 - import the solver once per worker, not per task
 
 
 def make_executor(workers: int) -> cf.ProcessPoolExecutor:

@@ -55,7 +55,7 @@ def solver_fingerprint() -> str:
     """sha256 of the rounded surface amplitudes of :data:`FINGERPRINT_SCENES` (computed once
     per process)."""
     from fem.scene import scene_from_dict
-    from fem.simulate import simulate
+    from fem.simulation import simulate
 
     outputs = []
     for scene in FINGERPRINT_SCENES:

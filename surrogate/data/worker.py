@@ -2,7 +2,7 @@
 
 Plain JSON strings cross the process (or Dask) boundary, so no solver object is ever pickled,
 and every sample is computed from its scene alone. Output columns are read from the typed
-attributes of :class:`fem.simulate.SimulationResult`, so a renamed result field fails loudly
+attributes of :class:`fem.simulation.SimulationResult`, so a renamed result field fails loudly
 instead of storing nulls.
 """
 
@@ -29,7 +29,7 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
     Never raises for a bad sample: the exception becomes ``status = "failed"`` with its text.
     The result depends on the scene only."""
     from fem.scene import scene_from_dict
-    from fem.simulate import simulate
+    from fem.simulation import simulate
 
     t0 = time.perf_counter()
     try:
@@ -60,7 +60,7 @@ def worker_solver_hash() -> str:
 
 def outputs_from_result(res: Any) -> dict[str, Any]:
     """Dataset output columns (amplitudes in um, distances in mm) of a
-    :class:`fem.simulate.SimulationResult`."""
+    :class:`fem.simulation.SimulationResult`."""
     from fem.results import magnitude
 
     out: dict[str, Any] = {

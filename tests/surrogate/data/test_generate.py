@@ -19,8 +19,8 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
+from fem import simulate
 from fem.scene import scene_from_dict, scene_hash
-from fem.simulate import simulate
 from hapticrom.cli import main
 from surrogate.data.errors import DatasetError
 from surrogate.data.generate import generate
@@ -162,9 +162,9 @@ def test_failed_samples_are_stored_with_their_error(tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     from distributed import LocalCluster
 
-    import fem.simulate
+    import fem.simulation
 
-    real = fem.simulate.simulate
+    real = fem.simulation.simulate
 
     def nan_result(res: Any) -> Any:
         return dataclasses.replace(res, center=res.center * np.nan)
@@ -175,7 +175,7 @@ def test_failed_samples_are_stored_with_their_error(tmp_path: Path,
             raise ValueError(f"synthetic failure at {f:.3f} Hz")
         return nan_result(real(scene)) if f < 120.0 else real(scene)
 
-    monkeypatch.setattr(fem.simulate, "simulate", flaky)
+    monkeypatch.setattr(fem.simulation, "simulate", flaky)
     space = space_from_dict(SPACE)
     planned, _ = plan_samples(space, 12)
     freqs = np.array([p.values["frequency_hz"] for p in planned])

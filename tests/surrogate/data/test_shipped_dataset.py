@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fem import simulate
 from fem.scene import scene_from_dict
-from fem.simulate import simulate
 from surrogate.data.inspect import validate_dataset
 from surrogate.data.provenance import solver_info
 
