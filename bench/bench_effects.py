@@ -16,8 +16,8 @@ import statistics
 import time
 from pathlib import Path
 
+from fem import simulate
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 EXAMPLE = EXAMPLES / "unit-double-forward.toml"

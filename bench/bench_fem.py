@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fem import simulate
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "forearm.toml"
 

@@ -5,7 +5,7 @@
     python bench/bench_generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
 
 Each run generates ``--n`` samples of the space into a fresh temporary dataset through the
-public ``surrogate.generate.generate`` (process pool, Parquet parts, manifest: the real path).
+public ``surrogate.data.generate.generate`` (process pool, Parquet parts, manifest: the real path).
 Reported per worker count: wall time of the run (worker start-up included), samples per
 minute, the mean solver time per sample (``wall_s`` column) and the parallel efficiency
 rate(w) / (w * rate(1)). No assertions: numbers go into the README.
@@ -28,7 +28,7 @@ COARSE_MESH = {"near_size_mm": 1.0, "far_size_mm": 4.0, "order": 1}
 
 
 def _space(path: Path, coarse: bool):
-    from surrogate.space import load_space, space_from_dict
+    from surrogate.data.space import load_space, space_from_dict
 
     space = load_space(path)
     if not coarse:
@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import pandas as pd
 
-    from surrogate.generate import generate, plan_samples
+    from surrogate.data.generate import generate, plan_samples
 
     space = _space(args.space, args.coarse)
     t0 = time.perf_counter()

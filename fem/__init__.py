@@ -1,9 +1,70 @@
 """hapticrom reference solver: axisymmetric Fourier-mode finite elements of layered tissue.
 
-Public entry points: ``fem.scene.load_scene`` / ``scene_from_dict`` to read a scene and
-``fem.simulate.simulate`` to solve it. Importing ``fem`` itself is cheap (no plotting, no VTK).
+Public entry points, importable from here: :func:`load_scene` / :func:`scene_from_dict` to
+read a scene (``fem.scene``), :func:`simulate` to solve it (``fem.simulation``). Importing
+``fem`` itself is cheap: the names below are loaded on first use (no numpy, scipy, plotting or
+VTK at import time).
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 SOLVER_VERSION = "0.1.0"
 
-__all__ = ["SOLVER_VERSION"]
+# public name -> module that defines it (loaded lazily by __getattr__)
+_LAZY = {
+    "LoadKind": "fem.scene",
+    "Scene": "fem.scene",
+    "SceneError": "fem.scene",
+    "dump_scene_toml": "fem.scene",
+    "load_scene": "fem.scene",
+    "scene_from_dict": "fem.scene",
+    "scene_hash": "fem.scene",
+    "scene_to_dict": "fem.scene",
+    "Material": "fem.materials",
+    "get_material": "fem.materials",
+    "SimulationResult": "fem.simulation",
+    "simulate": "fem.simulation",
+}
+
+__all__ = [
+    "SOLVER_VERSION",
+    "LoadKind",
+    "Material",
+    "Scene",
+    "SceneError",
+    "SimulationResult",
+    "dump_scene_toml",
+    "get_material",
+    "load_scene",
+    "scene_from_dict",
+    "scene_hash",
+    "scene_to_dict",
+    "simulate",
+]
+
+if TYPE_CHECKING:
+    from fem.materials import Material, get_material
+    from fem.scene import (
+        LoadKind,
+        Scene,
+        SceneError,
+        dump_scene_toml,
+        load_scene,
+        scene_from_dict,
+        scene_hash,
+        scene_to_dict,
+    )
+    from fem.simulation import SimulationResult, simulate
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'fem' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

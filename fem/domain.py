@@ -1,6 +1,6 @@
 """The discretised body: mesh, materials per element, absorbers and boundary conditions.
 
-This layer knows SI quantities only; ``fem.simulate`` translates a scene into it. A domain is the
+This layer knows SI quantities only; ``fem.problem`` translates a scene into it. A domain is the
 layered tissue (top to bottom, z = 0 at the skin surface, z positive into the body) out to a
 radius R, optionally with rectangles painted above the skin (a haptic unit), and whatever the
 outer side and base need (``fem.absorbers``).
@@ -16,34 +16,14 @@ from numpy.typing import NDArray
 
 from . import absorbers
 from .assembly import UR, UT, UZ
+from .materials import Material
 from .mesh import Mesh, build_mesh, graded_lines, growing_size
 
 SIDES = ("absorbing", "fixed", "free")
+# assembly name -> Material attribute (the names the element routines use)
+_ELEMENT_PROPERTIES = {"mu": "mu_Pa", "kappa": "bulk_Pa", "density": "density_kg_m3",
+                       "loss_factor": "loss_factor"}
 BASES = ("fixed", "absorbing", "free")
-
-
-@dataclass(frozen=True)
-class Solid:
-    """Linear (visco)elastic solid in SI units: E (Pa), nu, density (kg/m^3), loss factor eta
-    (hysteretic, E* = E (1 + i eta))."""
-
-    E: float
-    nu: float
-    density: float
-    loss_factor: float = 0.0
-    name: str = ""
-
-    @property
-    def mu(self) -> float:
-        return self.E / (2.0 * (1.0 + self.nu))
-
-    @property
-    def kappa(self) -> float:
-        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
-
-    @property
-    def shear_speed(self) -> float:
-        return float(np.sqrt(self.mu / self.density))
 
 
 @dataclass(frozen=True)
@@ -55,7 +35,7 @@ class Block:
     r1: float
     z0: float
     z1: float
-    solid: Solid
+    solid: Material
 
 
 @dataclass(frozen=True)
@@ -90,7 +70,7 @@ class Domain:
     """
 
     mesh: Mesh
-    solids: tuple[Solid, ...]
+    solids: tuple[Material, ...]
     radius: float
     depth: float
     side: str
@@ -103,8 +83,10 @@ class Domain:
     skipped: tuple[str, ...] = ()
 
     def element_property(self, name: str) -> NDArray:
-        """Per-element array of a Solid attribute (e.g. "mu", "density")."""
-        values = np.array([getattr(s, name) for s in self.solids])
+        """Per-element array of a material property by its assembly name: "mu" (shear modulus,
+        Pa), "kappa" (bulk modulus, Pa), "density" (kg/m3) or "loss_factor" (-)."""
+        attribute = _ELEMENT_PROPERTIES[name]
+        values = np.array([getattr(s, attribute) for s in self.solids])
         return values[self.mesh.material]
 
     def fixed(self) -> list[tuple[NDArray, int]]:
@@ -128,11 +110,11 @@ class Domain:
         return idx[np.argsort(m.nodes[idx, 0])]
 
 
-def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: str, base: str,
+def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side: str, base: str,
                    spec: MeshSpec, analysis: str, omega: float = 0.0,
                    r_breaks: Sequence[float] = (), blocks: Sequence[Block] = (),
                    damping_rate: float | None = None, z_breaks: Sequence[float] = ()) -> Domain:
-    """Mesh layered tissue (top to bottom: (thickness m, Solid)) with the treatments asked for.
+    """Mesh layered tissue (top to bottom: (thickness m, Material)) with the treatments asked for.
 
     Args:
         radius: physical radius R (m).
@@ -166,7 +148,7 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
     z_lines = graded_lines(z_iface, size_z, min_cells)
 
     effects, skipped = [], []
-    c_s = np.array([s.shear_speed for s in tissue])
+    c_s = np.array([s.shear_speed_m_s for s in tissue])
     wave = analysis != "static"
     lam_min = float(c_s.min()) * 2 * np.pi / omega if wave else np.inf
     h_wave = lam_min * spec.order / absorbers.ELEMENTS_PER_WAVELENGTH
@@ -224,8 +206,8 @@ def layered_domain(layers: Sequence[tuple[float, Solid]], radius: float, side: s
     return replace(domain, constraints=tuple((nodes, c) for c in (UR, UZ, UT)))
 
 
-def _paint(r_lines: NDArray, z_lines: NDArray, z_iface: NDArray, tissue: list[Solid],
-           blocks: Sequence[Block]) -> tuple[tuple[Solid, ...], NDArray]:
+def _paint(r_lines: NDArray, z_lines: NDArray, z_iface: NDArray, tissue: list[Material],
+           blocks: Sequence[Block]) -> tuple[tuple[Material, ...], NDArray]:
     """Material index per cell: tissue layers by depth (the last layer continues into a base
     absorber), then blocks painted on top in order; cells above the skin not covered are void."""
     rc = 0.5 * (r_lines[1:] + r_lines[:-1])

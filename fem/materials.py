@@ -6,7 +6,8 @@ custom ones with :func:`material_from_fields`.
 
 Silicones (Smooth-On): the datasheets give specific gravity, Shore hardness and the 100 %
 tensile modulus, not the small-strain Young's modulus, and published estimates differ 2-4x
-(DESIGN.md section 4). The library default is the neo-Hookean value implied by the datasheet
+(datasheet-derived values against the tensile fits of Marechal et al., Soft Robotics Materials
+Database). The library default is the neo-Hookean value implied by the datasheet
 100 % modulus, E = 3 sigma_100 / (2 - 1/4) (incompressible uniaxial nominal stress
 mu (lambda - lambda^-2) at stretch 2, E = 3 mu); the alternate set fitted to public tensile data
 is :data:`SILICONE_E_TENSILE_FIT_Pa`. Silicone ``loss_factor`` defaults to 0 (purely elastic);
@@ -35,7 +36,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Material:
-    """A linear isotropic solid.
+    """A linear isotropic solid in SI units: the one solid type of the solver. The library
+    holds named ones, a scene's layers, rings and board give theirs through ``solid()``, and
+    the domain paints them onto the mesh.
 
     ``E_Pa`` Young's modulus [Pa], ``density_kg_m3`` [kg/m3], ``nu`` Poisson's ratio [-],
     ``loss_factor`` hysteretic damping eta [-] (complex modulus E* = E (1 + i eta)).
@@ -49,10 +52,11 @@ class Material:
     source: str = ""
 
     def __post_init__(self) -> None:
-        # Thermodynamic admissibility: positive E and rho, -1 < nu < 0.5, eta >= 0.
+        # Thermodynamic admissibility: positive E, -1 < nu < 0.5, eta >= 0.
         checks = (
             ("E_Pa", self.E_Pa > 0, "E_Pa > 0"),
-            ("density_kg_m3", self.density_kg_m3 > 0, "density_kg_m3 > 0"),
+            # 0 is a massless solid: a part whose inertia is switched off (effects.unit_mass)
+            ("density_kg_m3", self.density_kg_m3 >= 0, "density_kg_m3 >= 0"),
             ("nu", -1.0 < self.nu < 0.5, "-1 < nu < 0.5"),
             ("loss_factor", self.loss_factor >= 0, "loss_factor >= 0"),
         )
@@ -102,14 +106,15 @@ class UnknownMaterialError(KeyError, ValueError):
         return self.message
 
 
-_TISSUE_SRC = "Guo et al. 2025 (Biomimetics 10:597) Table 1, as read in PAPER.md"
+_TISSUE_SRC = "Guo et al. 2025 (Biomimetics 10:597) Table 1"
 
 
 def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str) -> Material:
     return Material(name, E_kPa * 1e3, density, nu, 0.0, f"{_TISSUE_SRC}: {layer}")
 
 
-#: Smooth-On datasheet 100 % tensile modulus [Pa] (DESIGN.md section 4).
+#: Smooth-On datasheet 100 % tensile modulus [Pa] (Ecoflex 00-10, 00-50, Dragon Skin 10
+#: Medium and 30 technical bulletins).
 SILICONE_MODULUS_100_Pa: dict[str, float] = {
     "ecoflex-00-10": 55e3,
     "ecoflex-00-50": 83e3,
@@ -124,14 +129,15 @@ SILICONE_E_NEO_HOOKEAN_Pa: dict[str, float] = {
     "dragon-skin-30": 1016e3,
 }
 #: Small-strain E [Pa] fitted to public tensile data (Marechal et al., Soft Robotics Materials
-#: Database; DESIGN.md section 4). An alternative to the default, 2-4x softer.
+#: Database). An alternative to the default, 2-4x softer.
 SILICONE_E_TENSILE_FIT_Pa: dict[str, float] = {
     "ecoflex-00-10": 21e3,
     "ecoflex-00-50": 59e3,
     "dragon-skin-10-medium": 129e3,
     "dragon-skin-30": 538e3,
 }
-# (specific gravity, Shore hardness, paper letter) from the Smooth-On datasheets and PAPER.md.
+# (specific gravity, Shore hardness, letter) from the Smooth-On datasheets; the letters A-D are
+# the encapsulation materials of Guo et al. 2025.
 _SILICONE_DATA = {
     "ecoflex-00-10": (1.04, "00-10", "A"),
     "ecoflex-00-50": (1.07, "00-50", "B"),
@@ -144,11 +150,12 @@ def _silicone(name: str) -> Material:
     sg, shore, letter = _SILICONE_DATA[name]
     source = (
         f"Smooth-On datasheet: specific gravity {sg}, Shore {shore}, 100 % modulus "
-        f"{SILICONE_MODULUS_100_Pa[name] / 1e3:g} kPa (paper's material {letter}). "
+        f"{SILICONE_MODULUS_100_Pa[name] / 1e3:g} kPa (material {letter} of Guo et al. 2025). "
         f"E = {SILICONE_E_NEO_HOOKEAN_Pa[name] / 1e3:g} kPa: neo-Hookean small-strain modulus "
         f"from the 100 % modulus (default); a tensile-data fit (Marechal et al., Soft Robotics "
         f"Materials Database) gives {SILICONE_E_TENSILE_FIT_Pa[name] / 1e3:g} kPa "
-        f"(SILICONE_E_TENSILE_FIT_Pa). nu 0.49: nearly incompressible (DESIGN.md section 4)."
+        f"(SILICONE_E_TENSILE_FIT_Pa). nu 0.49: nearly incompressible, as cured silicone "
+        f"rubber is."
     )
     return Material(name, SILICONE_E_NEO_HOOKEAN_Pa[name], sg * 1000.0, 0.49, 0.0, source)
 

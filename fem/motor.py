@@ -20,8 +20,8 @@ exponential, with analytic switch times where tau changes or the speed reaches z
 :func:`simulate_speed` and :func:`phase` evaluate it exactly, vectorised over the query
 times; no ODE solver is involved. The motor starts at rest at t = 0.
 
-Default parameters are estimates, not a datasheet (DESIGN.md section 5; PAPER.md): the paper
-drives a Leader LCM0720A3463F coin ERM at 3.3 V and simulates 120 rev/s. Typical coin ERMs lag
+Default parameters are estimates, not a datasheet: Guo et al. 2025 (Biomimetics 10:597)
+drive a Leader LCM0720A3463F coin ERM at 3.3 V and simulates 120 rev/s. Typical coin ERMs lag
 10-20 ms, rise in 30-100 ms and stop in 50-150 ms. With first-order dynamics the 10-90 % rise
 time is ``tau ln 9 = 2.2 tau`` and the 50 % lag ``tau ln 2``: tau_spinup = 20 ms gives a
 44 ms rise and a 14 ms lag, tau_spindown = 35 ms a 77 ms 90-10 % stop. Dead time

@@ -14,15 +14,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from . import loads, unit
+from . import haptic_unit, loads
 from .assembly import UR
-from .domain import Domain, MeshSpec, Solid, layered_domain
-from .scene import Scene, SceneError
-
-EFFECTS = ("inertia", "hysteretic_damping", "encapsulation", "pogo", "unit_mass", "rocking",
-           "spin_up", "preload")
-
-UNIT_KINDS = ("unit", "normal_actuator")
+from .domain import Domain, MeshSpec, layered_domain
+from .scene import LoadKind, Scene, SceneError, Unit
 
 
 @dataclass(frozen=True)
@@ -37,7 +32,7 @@ class Problem:
         extra: (name, dofs, matrices) operators beyond the continuum (pin springs).
         edge: radius of the load footprint's edge (m), None for a point force.
         effects: resolved effect switches.
-        unit: the unit in SI, or None; layout: where its parts are.
+        unit: the scene's unit, or None; layout: where its parts are.
     """
 
     domain: Domain
@@ -47,8 +42,8 @@ class Problem:
     extra: tuple
     edge: float | None
     effects: dict[str, bool]
-    unit: unit.UnitSpec | None = None
-    layout: unit.UnitLayout | None = None
+    unit: Unit | None = None
+    layout: haptic_unit.UnitLayout | None = None
 
     def effect_lists(self) -> tuple[list[str], list[str]]:
         """(included, skipped) effect names for the summary, with the domain's own."""
@@ -59,11 +54,6 @@ class Problem:
         return inc, skip
 
 
-def _solid(E_kPa: float, nu: float, density: float, loss: float, name: str,
-           hysteretic: bool) -> Solid:
-    return Solid(E_kPa * 1e3, nu, density, loss if hysteretic else 0.0, name)
-
-
 def _has_loss(scene: Scene) -> bool:
     rings = scene.unit.encapsulation if scene.unit is not None else ()
     return any(x.loss_factor > 0 for x in (*scene.tissue.layers, *rings))
@@ -72,8 +62,8 @@ def _has_loss(scene: Scene) -> bool:
 def resolve_effects(scene: Scene) -> dict[str, bool]:
     """Effect switches: the scene's explicit choices over what it contains. Every effect the
     scene can have is on by default, except the pin preload check (on request only)."""
-    kind, u = scene.load.kind, scene.unit
-    erm = kind == "unit"
+    u = scene.unit
+    erm = scene.load.kind == LoadKind.UNIT
     available = {
         "inertia": (scene.analysis.kind != "static", "analysis.kind = 'harmonic' or 'transient'"),
         "hysteretic_damping": (_has_loss(scene), "a layer or ring with loss_factor > 0"),
@@ -119,21 +109,6 @@ def _check_unit_restrained(scene: Scene, effects: dict[str, bool]) -> None:
         raise SceneError("unit.ring_contact", f"a transient spin-up {why}: it would drift away")
 
 
-def unit_spec(scene: Scene, hysteretic: bool) -> unit.UnitSpec:
-    """The scene's unit in SI units."""
-    u = scene.unit
-    m, b, p = u.motor, u.board, u.pogo
-    rings = tuple(_solid(r.E_kPa, r.nu, r.density_kg_m3, r.loss_factor, r.name, hysteretic)
-                  for r in u.encapsulation)
-    motor = unit.MotorSpec(m.radius_m, m.height_m, m.mass_kg, m.unbalance_kg_m,
-                           m.rotor_height_m, m.E_Pa, m.nu)
-    pogo = unit.PogoSpec(p.count, p.radius_m, p.stiffness_N_m, p.length_m, p.travel_m,
-                         p.tip_diameter_m)
-    board = _solid(b.E_kPa, b.nu, b.density_kg_m3, 0.0, "pcb", hysteretic)
-    return unit.UnitSpec(motor, u.orientation, u.attachment, b.thickness_m, b.radius_m, board,
-                         rings, u.ring_thickness_m, pogo, 1e-3 * u.ring_gap_mm, u.ring_contact)
-
-
 def mesh_spec(scene: Scene) -> MeshSpec:
     m = scene.mesh
     return MeshSpec(m.near_size_mm * 1e-3, m.near_radius_mm * 1e-3, m.far_size_mm * 1e-3,
@@ -143,7 +118,7 @@ def mesh_spec(scene: Scene) -> MeshSpec:
 def drive_omega(scene: Scene) -> float:
     """Angular frequency (rad/s) the absorbers are tuned for: the analysis frequency, or for a
     transient ERM the motor's rated speed."""
-    if scene.analysis.kind == "transient" and scene.load.kind == "unit":
+    if scene.analysis.kind == "transient" and scene.load.kind == LoadKind.UNIT:
         return 2 * np.pi * scene.unit.motor.rated_frequency_hz
     return 2 * np.pi * scene.analysis.frequency_hz
 
@@ -152,31 +127,30 @@ def build_problem(scene: Scene) -> Problem:
     """Discretise a scene with only the effects it asks for."""
     effects = resolve_effects(scene)
     hyst = effects["hysteretic_damping"]
-    layers = [(ly.thickness_m, _solid(ly.E_kPa, ly.nu, ly.density_kg_m3, ly.loss_factor,
-                                      ly.name, hyst)) for ly in scene.tissue.layers]
+    layers = [(ly.thickness_m, ly.solid(hyst)) for ly in scene.tissue.layers]
     dynamic = effects["inertia"]
     analysis = scene.analysis.kind if dynamic else "static"
     omega = drive_omega(scene) if dynamic else 0.0
-    spec, lay = None, None
+    lay = None
     r_breaks, blocks, z_breaks = [], (), ()
-    if scene.load.kind in UNIT_KINDS:
-        spec = unit_spec(scene, hyst)
-        lay = unit.layout(spec, effects["encapsulation"], effects["unit_mass"], effects["rocking"])
+    if scene.load.kind.is_unit:
+        lay = haptic_unit.layout(scene.unit, effects["encapsulation"], effects["unit_mass"],
+                                 effects["rocking"], hyst)
         r_breaks, blocks, z_breaks = lay.r_breaks, lay.blocks, lay.z_breaks
-    elif scene.load.kind == "pressure_patch":
+    elif scene.load.kind == LoadKind.PRESSURE_PATCH:
         r_breaks = [scene.load.radius_m]
     domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side, scene.tissue.base,
                             mesh_spec(scene), analysis, omega, r_breaks, blocks,
                             z_breaks=z_breaks)
     if lay is not None and lay.contact_ties is not None:
         domain = replace(domain, ties=(ring_contact_ties(domain, *lay.contact_ties),))
-    mode = _mode(scene)
+    mode = scene.load.fourier_mode
     extra = ()
     if lay is not None and lay.pins is not None:
-        extra = (("pogo pins", *unit.pin_spring(domain, mode, lay.pins)),)
+        extra = (("pogo pins", *haptic_unit.pin_spring(domain, mode, lay.pins)),)
     steady_omega = omega if scene.analysis.kind == "harmonic" else 0.0
-    return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay, spec), extra,
-                   _edge(scene, lay), effects, spec, lay)
+    return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay), extra,
+                   _edge(scene, lay), effects, scene.unit, lay)
 
 
 def ring_contact_ties(domain: Domain, r_core: float, r_ring: float, z_top: float,
@@ -198,30 +172,23 @@ def ring_contact_ties(domain: Domain, r_core: float, r_ring: float, z_top: float
     return ring, core, UR
 
 
-def _mode(scene: Scene) -> int:
-    if scene.load.kind == "unit":
-        return 1
-    if scene.load.kind == "normal_actuator":
-        return 0
-    return 0 if scene.load.direction == "normal" else 1
-
-
-def _edge(scene: Scene, lay: unit.UnitLayout | None) -> float | None:
+def _edge(scene: Scene, lay: haptic_unit.UnitLayout | None) -> float | None:
     if lay is not None:
         return lay.edge
-    return scene.load.radius_m if scene.load.kind == "pressure_patch" else None
+    return scene.load.radius_m if scene.load.kind == LoadKind.PRESSURE_PATCH else None
 
 
-def _load(scene: Scene, domain: Domain, mode: int, lay, spec) -> NDArray:
+def _load(scene: Scene, domain: Domain, mode: int,
+          lay: haptic_unit.UnitLayout | None) -> NDArray:
     """Full nodal load at the drive amplitude (for a transient ERM: per newton of force)."""
     ld = scene.load
-    if ld.kind == "unit":
-        w = 2 * np.pi * scene.analysis.frequency_hz
-        force = spec.motor.unbalance * w**2 if scene.analysis.kind != "transient" else 1.0
+    if ld.kind == LoadKind.UNIT:
+        steady = scene.analysis.kind != "transient"
+        force = scene.unit.motor.force_N_at(scene.analysis.frequency_hz) if steady else 1.0
         return loads.axis_point_force(domain, 1, force, z=lay.rotor_z)
-    if ld.kind == "normal_actuator":
-        return loads.axis_point_force(domain, 0, scene.unit.actuator.force_N, z=lay.centre_z)
-    if ld.kind == "point_force":
+    if ld.kind == LoadKind.NORMAL_ACTUATOR:
+        return loads.axis_point_force(domain, 0, scene.unit.actuator.force_N, z=lay.center_z)
+    if ld.kind == LoadKind.POINT_FORCE:
         return loads.axis_point_force(domain, mode, ld.force_N)
     t = ld.amplitude_Pa
     return loads.surface_traction(domain, mode, ld.radius_m, (0.0, t, 0.0) if mode == 0

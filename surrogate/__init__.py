@@ -1,8 +1,8 @@
-"""hapticrom surrogates: parameter spaces, dataset generation and storage, learned models.
+"""hapticrom surrogates: the dataset layer and the learned models built on it.
 
-Import-light on purpose: ``import surrogate`` loads nothing heavy. Use the submodules:
-``surrogate.space`` (parameter spaces), ``surrogate.sampling`` (Sobol / Halton / LHS designs),
-``surrogate.store`` (Parquet dataset store), ``surrogate.generate`` (resumable generation on a
-process pool or a Dask cluster), ``surrogate.ingest`` (external results), ``surrogate.cli``
-(the ``generate``, ``dataset`` and ``ingest`` subcommands).
+``surrogate.data`` holds parameter spaces, sampling, the Parquet dataset store, resumable
+generation (process pool or Dask) and ingest of external results; it is the only part of the
+package that imports the FE solver. The estimators, ONNX export and the model registry sit
+beside it; ``surrogate.runtime`` is the run-time predictor (numpy + onnxruntime only).
+Importing ``surrogate`` loads nothing heavy.
 """

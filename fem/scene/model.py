@@ -1,0 +1,241 @@
+"""The scene's frozen dataclasses: one per TOML table, values in the units named by each field.
+
+Values are kept in the file's units (mm, kPa, g, ms) so that a scene written back is the scene
+read (exact round trips, stable hashes); each SI quantity the solver needs is a read-only view
+defined once (``thickness_m``, ``E_Pa``, ``solid()`` ...; helpers in ``fem.scene.si``). The
+haptic unit's dataclasses and its derived geometry (core and outer radius, rotor plane, pin
+preload) are in ``fem.scene.unit_model``.
+Constructing a :class:`Scene` validates it (see ``fem.scene.validate``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from fieldspec import FieldError
+
+from .si import Elastic, si_view
+from .unit_model import Unit
+
+__all__ = [
+    "EFFECT_NAMES",
+    "UNIT_LOAD_KINDS",
+    "Analysis",
+    "Effects",
+    "Layer",
+    "Load",
+    "LoadKind",
+    "MeshSettings",
+    "Output",
+    "Scene",
+    "SceneError",
+    "Tissue",
+]
+
+
+class SceneError(FieldError):
+    """Invalid scene input. ``field`` is the dotted path of the bad value, e.g.
+    ``tissue.layer[1].nu``, or ``"<file>"`` for a TOML syntax error."""
+
+    __module__ = "fem.scene"  # its public home (error reports print module.name)
+
+
+class LoadKind(StrEnum):
+    """What excites the tissue. The values are the strings of the scene files (``load.kind``)."""
+
+    PRESSURE_PATCH = "pressure_patch"
+    POINT_FORCE = "point_force"
+    UNIT = "unit"  # a coin ERM motor: unbalance force rotating parallel to the skin
+    NORMAL_ACTUATOR = "normal_actuator"  # an LRA / voice coil: vertical force on the housing
+
+    @property
+    def is_unit(self) -> bool:
+        """A haptic unit sitting on the skin (needs a ``[unit]`` table)."""
+        return self in UNIT_LOAD_KINDS
+
+
+UNIT_LOAD_KINDS = (LoadKind.UNIT, LoadKind.NORMAL_ACTUATOR)
+"""Load kinds that are a haptic unit sitting on the skin (they need a ``[unit]`` table)."""
+
+EFFECT_NAMES = ("inertia", "hysteretic_damping", "encapsulation", "pogo", "unit_mass", "rocking",
+                "spin_up", "preload")
+"""The physical effects a scene can force on (true) or off (false); absent = auto."""
+
+
+@dataclass(frozen=True)
+class Layer(Elastic):
+    """One tissue layer: thickness [mm], Young's modulus [kPa], density [kg/m3], Poisson's
+    ratio [-], hysteretic loss factor eta [-] (E* = E (1 + i eta)). ``material`` is the
+    canonical library name the values started from, if any."""
+
+    name: str
+    thickness_mm: float
+    E_kPa: float
+    density_kg_m3: float
+    nu: float
+    loss_factor: float = 0.0
+    material: str | None = None
+
+    thickness_m = si_view("thickness_mm", 1e-3)
+
+
+@dataclass(frozen=True)
+class Tissue:
+    """Layered cylinder of radius ``radius_mm`` [mm]; ``layers`` top (skin) to bottom."""
+
+    layers: tuple[Layer, ...]
+    radius_mm: float = 50.0
+    side: str = "absorbing"
+    base: str = "fixed"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "layers", tuple(self.layers))  # a list would be unhashable
+
+    radius_m = si_view("radius_mm", 1e-3)
+
+    @property
+    def depth_mm(self) -> float:
+        """Total thickness of all layers [mm]."""
+        return sum(layer.thickness_mm for layer in self.layers)
+
+
+@dataclass(frozen=True)
+class Load:
+    """Surface load at the axis: a pressure patch of ``radius_mm`` [mm] and ``amplitude_Pa``
+    [Pa], or a point force ``force_N`` [N]; "normal" is Fourier mode 0, "tangential" mode 1.
+    For the unit kinds (:data:`UNIT_LOAD_KINDS`) the force comes from ``Scene.unit`` and
+    ``direction``, ``radius_mm``, ``amplitude_Pa``, ``force_N`` are not used."""
+
+    kind: LoadKind = LoadKind.PRESSURE_PATCH
+    direction: str = "normal"
+    radius_mm: float = 2.0
+    amplitude_Pa: float = 1000.0
+    force_N: float = 1.0
+
+    def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "kind", LoadKind(self.kind))
+        except (ValueError, TypeError):  # an unknown kind is left to validation to report
+            pass
+
+    radius_m = si_view("radius_mm", 1e-3)
+
+    @property
+    def fourier_mode(self) -> int:
+        """The Fourier mode the load excites: 1 for an ERM unit (force parallel to the skin),
+        0 for a normal actuator, else 0 / 1 for a normal / tangential direction."""
+        if self.kind == LoadKind.UNIT:
+            return 1
+        if self.kind == LoadKind.NORMAL_ACTUATOR:
+            return 0
+        return 0 if self.direction == "normal" else 1
+
+
+@dataclass(frozen=True)
+class Effects:
+    """Physical effects forced on (True) or off (False); None lets the solver decide from the
+    scene ("auto")."""
+
+    inertia: bool | None = None
+    hysteretic_damping: bool | None = None
+    encapsulation: bool | None = None
+    pogo: bool | None = None
+    unit_mass: bool | None = None
+    rocking: bool | None = None
+    spin_up: bool | None = None
+    preload: bool | None = None
+
+    def resolve(self, name: str, auto: bool) -> bool:
+        """The setting of effect ``name``, or ``auto`` when it is left to the solver."""
+        value = getattr(self, name)
+        return auto if value is None else value
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Analysis kind; ``frequency_hz`` drives harmonic analyses (and normal actuators in a
+    transient). Transient: step and duration [ms], generalised-alpha spectral radius
+    ``rho_inf`` [-], and the ERM drive as (t_ms, volts) steps, each held until the next."""
+
+    kind: str = "static"
+    frequency_hz: float = 120.0
+    time_step_ms: float = 0.05
+    duration_ms: float = 200.0
+    rho_inf: float = 0.9
+    voltage_schedule: tuple[tuple[float, float], ...] = ((0.0, 3.3),)
+
+    def __post_init__(self) -> None:
+        steps = self.voltage_schedule  # lists become tuples (hashable); validation does the rest
+        if isinstance(steps, list | tuple):
+            object.__setattr__(self, "voltage_schedule", tuple(
+                tuple(pair) if isinstance(pair, list | tuple) else pair for pair in steps))
+
+    time_step_s = si_view("time_step_ms", 1e-3)
+    duration_s = si_view("duration_ms", 1e-3)
+
+    @property
+    def voltage_schedule_s(self) -> tuple[tuple[float, float], ...]:
+        """The schedule as (t_start_s, volts) pairs (``fem.motor.VoltageSchedule`` steps)."""
+        return tuple((t * 1e-3, v) for t, v in self.voltage_schedule)
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """Element size [mm] within ``near_radius_mm`` of the axis and beyond; element order."""
+
+    near_size_mm: float = 0.5
+    near_radius_mm: float = 8.0
+    far_size_mm: float = 2.0
+    order: int = 2
+
+
+@dataclass(frozen=True)
+class Output:
+    """Surface probe radii [mm], stored in the order given; the surface profile from the unit
+    edge outwards every ``profile_step_mm`` over ``profile_length_mm`` [mm]; transient
+    histories are recorded every ``history_every``-th step."""
+
+    radii_mm: tuple[float, ...] = (0.0, 2.0, 4.0, 8.0, 12.0, 16.0, 20.0)
+    profile_step_mm: float = 1.0
+    profile_length_mm: float = 20.0
+    history_every: int = 1
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radii_mm", tuple(self.radii_mm))
+
+    @property
+    def radii_m(self) -> tuple[float, ...]:
+        return tuple(r * 1e-3 for r in self.radii_mm)
+
+    profile_step_m = si_view("profile_step_mm", 1e-3)
+    profile_length_m = si_view("profile_length_mm", 1e-3)
+
+    @property
+    def profile_distances_mm(self) -> tuple[float, ...]:
+        """Profile sample distances from the edge [mm]: 0, step, ... up to the length (the
+        length itself included when it is a whole number of steps, to 1e-9 relative)."""
+        n = math.floor(self.profile_length_mm / self.profile_step_mm * (1 + 1e-9))
+        return tuple(i * self.profile_step_mm for i in range(n + 1))
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A complete, validated FE scene. Construction validates (raises :class:`SceneError`)."""
+
+    tissue: Tissue
+    load: Load = field(default_factory=Load)
+    analysis: Analysis = field(default_factory=Analysis)
+    mesh: MeshSettings = field(default_factory=MeshSettings)
+    output: Output = field(default_factory=Output)
+    unit: Unit | None = None
+    effects: Effects = field(default_factory=Effects)
+
+    def __post_init__(self) -> None:
+        from .io import scene_to_dict
+        from .validate import validate
+
+        validate(scene_to_dict(self))  # direct construction gets the same checks as a file
+
+

@@ -1,0 +1,231 @@
+"""Validation of a TOML-shaped scene mapping against the spec tables, and building the frozen
+dataclasses from the resolved result. Every error is a :class:`SceneError` naming the field
+(dotted path) and the allowed range or choices.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from fieldspec import (
+    Context,
+    Spec,
+    allowed_text,
+    read_array,
+    read_fields,
+    read_table,
+    read_value,
+    require_table,
+)
+
+from ..materials import Material, UnknownMaterialError, get_material
+from .model import UNIT_LOAD_KINDS, Layer, LoadKind, Scene, SceneError, Tissue
+from .tables import (
+    ACTUATOR,
+    BOARD,
+    DEFAULT_FOREARM_LAYERS,
+    LAYER,
+    MAX_LAYERS,
+    MAX_RINGS,
+    MOTOR,
+    POGO,
+    RING,
+    SUBARRAYS,
+    TABLES,
+    UNIT,
+    UNIT_KEYS,
+    UNIT_PARTS,
+)
+from .unit_model import Ring, Unit
+
+__all__ = ["build_scene", "read_solid", "validate"]
+
+def _material(name: str, path: str) -> Material:
+    try:
+        return get_material(name)
+    except UnknownMaterialError as err:
+        raise SceneError(path, f"{path}: {err}") from None
+
+
+def read_solid(raw: Any, path: str, specs: Mapping[str, Spec], ctx: Context,
+               default_name: str | None = None) -> dict[str, Any]:
+    """A table of solid properties whose E, density, nu (and loss factor, name) default to
+    those of its library ``material``; the canonical material name is stored."""
+    raw = require_table(raw, path, list(specs), ctx)
+    defaults: dict[str, Any] = {"name": default_name}
+    material = raw.get("material", specs["material"].default)
+    if material is not None:
+        name = read_value(material, specs["material"], "material", f"{path}.material", ctx)
+        mat = _material(name, f"{path}.material")
+        defaults = {"name": mat.name, "material": mat.name, "E_kPa": mat.E_Pa / 1e3,
+                    "density_kg_m3": mat.density_kg_m3, "nu": mat.nu,
+                    "loss_factor": mat.loss_factor}
+        raw = {**raw, "material": mat.name}  # store the canonical name, not the alias
+    return read_fields(raw, specs, path, ctx, {k: v for k, v in defaults.items() if k in specs})
+
+
+def _read_layers(raw: Any, ctx: Context) -> list[dict[str, Any]]:
+    if raw is None:  # the default forearm
+        return [{key: getattr(layer, key) for key in LAYER} for layer in DEFAULT_FOREARM_LAYERS]
+    return read_array(raw, "tissue.layer", ctx,
+                      lambda item, where, i: read_solid(item, where, LAYER, ctx, f"layer{i}"),
+                      count=(1, MAX_LAYERS), noun="layers",
+                      expected="an array of tables ([[tissue.layer]])")
+
+
+def _read_ring(item: Any, where: str, i: int, ctx: Context) -> dict[str, Any]:
+    if isinstance(item, str):  # a bare name: exactly the library material
+        item = {"material": _material(item, where).name}
+    elif not isinstance(item, Mapping):
+        raise SceneError(where, f"{where} = {item!r} has the wrong type: expected a "
+                         "material name or an inline table {material = ..., E_kPa = ...}")
+    return read_solid(item, where, RING, ctx, f"ring{i}")
+
+
+def _read_rings(raw: Any, ctx: Context) -> list[dict[str, Any]]:
+    """``unit.encapsulation``: library names (aliases allowed) or inline layer-like tables."""
+    return read_array(raw, "unit.encapsulation", ctx,
+                      lambda item, where, i: _read_ring(item, where, i, ctx),
+                      count=(0, MAX_RINGS), noun="rings",
+                      expected="a list of ring materials (library names or inline tables), "
+                      "inner to outer")
+
+
+def _read_motor(raw: Any, ctx: Context) -> dict[str, Any]:
+    """[unit.motor]; an unbalance given as force_N at force_at_hz is resolved to g mm."""
+    path = "unit.motor"
+    raw = require_table(raw, path, list(MOTOR), ctx)
+    out = read_fields(raw, MOTOR, path, ctx)
+    force, hz = out.pop("force_N"), out.pop("force_at_hz")
+    if force is not None and "unbalance_g_mm" in raw:
+        raise SceneError(f"{path}.force_N", f"{path}: give either unbalance_g_mm or force_N "
+                         "(with force_at_hz), not both")
+    if (force is None) != (hz is None):
+        key = "force_at_hz" if force is not None else "force_N"
+        other = "force_N" if force is not None else "force_at_hz"
+        raise SceneError(f"{path}.{key}", f"{path}.{key} is missing: {other} needs it "
+                         f"({allowed_text(MOTOR[key], key, ctx)})")
+    if force is not None:
+        unbalance = force / (2.0 * math.pi * hz) ** 2 * 1e6  # kg m -> g mm
+        if not 0 < unbalance <= 1000:
+            allowed = allowed_text(MOTOR["unbalance_g_mm"], "unbalance_g_mm", ctx)
+            raise SceneError(f"{path}.force_N", f"{path}.force_N = {force!r} at force_at_hz = "
+                             f"{hz!r} gives unbalance_g_mm = {unbalance:g}, out of range: "
+                             f"allowed {allowed}")
+        out["unbalance_g_mm"] = unbalance
+    return out
+
+
+def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
+    kind = ctx["load.kind"]
+    if kind not in UNIT_LOAD_KINDS:
+        raise SceneError("unit", f'the [unit] table needs load.kind = "unit" or '
+                         f'"normal_actuator" (load.kind is {kind!r}); remove [unit] otherwise')
+    raw = require_table(raw, "unit", UNIT_KEYS, ctx)
+    out = read_fields(raw, UNIT, "unit", ctx)
+    out["encapsulation"] = _read_rings(raw.get("encapsulation", []), ctx)
+    out["motor"] = _read_motor(raw.get("motor", {}), ctx)
+    out["board"] = read_solid(raw.get("board", {}), "unit.board", BOARD, ctx)
+    out["pogo"] = read_table(raw.get("pogo", {}), POGO, "unit.pogo", ctx)
+    if kind == LoadKind.NORMAL_ACTUATOR:
+        out["actuator"] = read_table(raw.get("actuator", {}), ACTUATOR, "unit.actuator", ctx)
+    elif "actuator" in raw:
+        raise SceneError("unit.actuator", 'unit.actuator is only used with load.kind = '
+                         f'"normal_actuator" (load.kind is {kind!r}); remove it')
+    _check_unit_geometry(build_unit(out), ctx)
+    return {key: out[key] for key in UNIT_KEYS if key in out}
+
+
+def _check_unit_geometry(unit: Unit, ctx: Context) -> None:
+    """Cross-field checks: pins under the board, and the unit inside the tissue cylinder."""
+    board, pogo = unit.board, unit.pogo
+    if unit.attachment == "pogo":
+        if not board.present:
+            raise SceneError("unit.board.thickness_mm", 'unit.board.thickness_mm = 0.0 is out '
+                             'of range for unit.attachment = "pogo": allowed 0 < thickness_mm '
+                             "<= 10 (the pins are soldered under the board)")
+        r_board = 0.5 * board.diameter_mm
+        if pogo.radius_mm + 0.5 * pogo.tip_diameter_mm > r_board:
+            raise SceneError("unit.pogo.radius_mm", f"unit.pogo.radius_mm = "
+                             f"{pogo.radius_mm!r} is out of range: the pin tips must sit under "
+                             "the board, allowed radius_mm + tip_diameter_mm / 2 <= "
+                             f"unit.board.diameter_mm / 2 (= {r_board:g}), i.e. radius_mm <= "
+                             f"{r_board - 0.5 * pogo.tip_diameter_mm:g}")
+    core, outer, n = unit.core_radius_mm, unit.outer_radius_mm, len(unit.encapsulation)
+    tissue = ctx["tissue.radius_mm"]
+    if not outer < tissue:
+        # blame the part that sets the size: the rings, else the motor or the board
+        if n:
+            where = "unit.encapsulation"
+        elif unit.core_radius_m == unit.motor.radius_m:
+            where = "unit.motor.diameter_mm"
+        else:
+            where = "unit.board.diameter_mm"
+        gap = f" + {unit.ring_gap_mm:g} mm slit" if unit.ring_gap_mm else ""
+        raise SceneError(where, f"the unit's outer radius {outer:g} mm (core {core:g} mm{gap} + "
+                         f"{n} ring(s) x {unit.ring_thickness_mm:g} mm), set by {where}, is out "
+                         f"of range: allowed outer radius < tissue.radius_mm (= {tissue:g})")
+
+
+def _read_table(name: str, raw: Any, ctx: Context) -> dict[str, Any]:
+    specs = TABLES[name][1]
+    sub = SUBARRAYS.get(name)
+    out = read_table(raw, specs, name, ctx, [sub] if sub else [])
+    if name == "tissue":
+        out["layer"] = _read_layers(raw.get("layer"), ctx)
+    if name == "effects":  # auto (None) is the absence of a key
+        out = {key: value for key, value in out.items() if value is not None}
+    return out
+
+
+def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """Check ``d`` against the specs; return it fully resolved (defaults filled, ints -> float,
+    material names canonical, rings as full tables), TOML-shaped. ``unit`` is present only for
+    the unit load kinds, ``effects`` only when some effect is set."""
+    ctx = Context(SceneError)
+    require_table(d, "", list(TABLES), ctx, what="the scene")
+    out: dict[str, dict[str, Any]] = {}
+    for name in TABLES:
+        if name == "unit":
+            if "unit" in d:
+                out[name] = _read_unit(d["unit"], ctx)
+            elif ctx["load.kind"] in UNIT_LOAD_KINDS:
+                raise SceneError("unit", f"load.kind = {ctx['load.kind']!r} needs a [unit] "
+                                 "table (an empty one takes every default)")
+            continue
+        table = _read_table(name, d.get(name, {}), ctx)
+        if table or name != "effects":
+            out[name] = table
+    return out
+
+
+def make(cls: type, table: Mapping[str, Any]) -> Any:
+    """``cls`` from the keys of ``table`` that are its fields."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    return cls(**{key: value for key, value in table.items() if key in names})
+
+
+def build_unit(u: Mapping[str, Any]) -> Unit:
+    """A :class:`Unit` from its resolved table."""
+    parts = {name: make(cls, u[name]) for name, (cls, _) in UNIT_PARTS.items() if name in u}
+    return Unit(u["orientation"], u["attachment"],
+                tuple(make(Ring, ring) for ring in u["encapsulation"]), u["ring_thickness_mm"],
+                u["ring_contact"], **parts)
+
+
+def build_scene(resolved: Mapping[str, Mapping[str, Any]]) -> Scene:
+    """A :class:`Scene` from the output of :func:`validate`."""
+    parts: dict[str, Any] = {}
+    for name, (cls, _) in TABLES.items():
+        if name == "unit":
+            if name in resolved:
+                parts[name] = build_unit(resolved[name])
+        elif name == "tissue":
+            layers = tuple(make(Layer, layer) for layer in resolved[name]["layer"])
+            parts[name] = make(Tissue, {**resolved[name], "layers": layers})
+        else:
+            parts[name] = make(cls, resolved.get(name, {}))
+    return Scene(**parts)

@@ -1,0 +1,92 @@
+"""``hapticrom dataset info|validate|merge``: inspect, check and combine datasets.
+
+``validate`` exits 0 for a valid dataset and 2 (bad input) with the list of problems.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``dataset`` sub-parser and its three sub-commands."""
+    p = subparsers.add_parser("dataset", help="inspect, validate or merge datasets")
+    sub = p.add_subparsers(dest="dataset_command", required=True,
+                           metavar="{info,validate,merge}")
+    info = sub.add_parser("info", help="summary of a dataset")
+    info.add_argument("path")
+    info.add_argument("--json", action="store_true", help="print JSON")
+    info.set_defaults(func=run_info)
+    val = sub.add_parser("validate", help="check parts, schema, provenance and ranges")
+    val.add_argument("path")
+    val.add_argument("--rehash", action="store_true",
+                     help="also recompute every sample_id from its scene")
+    val.set_defaults(func=run_validate)
+    merge = sub.add_parser("merge", help="union of datasets into a new one")
+    merge.add_argument("inputs", nargs="+", help="input dataset directories")
+    merge.add_argument("--out", required=True, help="new dataset directory")
+    merge.add_argument("--allow-mixed-solvers", action="store_true",
+                       help="merge results of different solver versions")
+    merge.set_defaults(func=run_merge)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    """Print the dataset summary (text or JSON)."""
+    from surrogate.data.inspect import dataset_info
+
+    info = dataset_info(args.path)
+    print(json.dumps(info, indent=1) if args.json else format_info(info))
+    return 0
+
+
+def format_info(info: dict[str, Any]) -> str:
+    """The text form of :func:`surrogate.data.inspect.dataset_info`."""
+    s = info.get("sampling") or {}
+    solver = info.get("solver") or {}
+    lines = [
+        f"dataset   {info['path']}",
+        f"space     {info['space']} (hash {(info['space_hash'] or 'none: merged')[:12]})",
+        f"params    {', '.join(info['parameters'])}",
+        f"sampling  {s.get('sampler')} seed {s.get('seed')}, target {s.get('target_n')}, "
+        f"scanned {s.get('scanned')} (rejected {s.get('rejected')}, repeated scenes "
+        f"{s.get('duplicates')})",
+        f"solver    {solver.get('version')} ({solver.get('hash')}) git "
+        f"{solver.get('git_revision')}; all: {', '.join(info['solver_versions'])}",
+        f"analysis  {info.get('analysis_kind')}; mesh {info.get('mesh')}",
+        f"rows      {info['rows']} ({info['ok']} ok, {info['failed']} failed) in "
+        f"{info['parts']} parts, {info['bytes'] / 1e6:.2f} MB",
+        f"sources   {', '.join(f'{k}: {v}' for k, v in info['by_source'].items()) or '-'}",
+        f"runs      {info['runs']} ({info['interrupted_runs']} interrupted)",
+    ]
+    if info["temp_files"]:
+        lines.append(f"note      {info['temp_files']} unfinished temp parts (ignored; removed "
+                     "by the next generate)")
+    return "\n".join(lines)
+
+
+def run_validate(args: argparse.Namespace) -> int:
+    """Exit 0 when valid, 2 (an invalid input dataset) with the list of problems."""
+    from surrogate.data.inspect import validate_dataset
+
+    problems = validate_dataset(args.path, rehash=args.rehash)
+    for p in problems:
+        print(f"problem: {p}")
+    if problems:
+        print(f"hapticrom dataset validate: {args.path}: {len(problems)} problems",
+              file=sys.stderr)
+        return 2
+    print(f"{args.path}: valid")
+    return 0
+
+
+def run_merge(args: argparse.Namespace) -> int:
+    """Merge the inputs into a new dataset."""
+    from surrogate.data.inspect import merge_datasets
+
+    res = merge_datasets(args.out, args.inputs, args.allow_mixed_solvers)
+    print(f"{args.out}: {res['rows_out']} rows from {res['rows_in']} "
+          f"({res['duplicates_dropped']} duplicates dropped), {res['parts']} parts")
+    return 0

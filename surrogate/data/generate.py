@@ -1,0 +1,320 @@
+"""Generate a dataset: sample a space, solve every scene, store rows; resumable.
+
+``generate(space, n, out)`` makes ``out`` hold the first ``n`` distinct feasible design points
+of the space (sample indices in sequence order; points rejected by a constraint or resolving
+to a scene already planned are skipped and counted in the manifest). Work runs on a local
+process pool (default: one process per core) or on a Dask distributed cluster
+(``scheduler="tcp://HOST:PORT"`` or a ``distributed.Client``).
+
+Resumability: completed samples are buffered and flushed as small Parquet parts (every
+``flush_every`` samples or ``flush_seconds``), each written atomically (``surrogate.data.store``).
+Killed at any moment, even by SIGKILL, the same call again reads the ids already stored,
+skips them and runs the rest: nothing completed is lost, nothing is stored twice. Raising
+``n`` extends the dataset along the same design sequence.
+
+Determinism: the worker (:func:`surrogate.data.worker.run_chunk`) computes each sample from
+its scene alone (JSON in, JSON out), BLAS threads are pinned to one per worker process, and
+rows are sorted by sample index before each flush, so results do not depend on scheduling or
+chunking.
+
+Dask: every worker needs the same hapticrom installation (each task reports the fingerprint
+of the solver it ran; a mismatch aborts the run and its rows are discarded). Start workers
+with one thread each (``dask worker tcp://HOST:PORT --nworkers N --nthreads 1``): part of
+every sample runs in Python under the GIL.
+
+Failures: if the solver raises for a sample, the sample is stored with status "failed" and
+the error text (exception type, message, raising location); non-finite outputs are stored as
+failed too. A broken worker process or a lost Dask worker aborts the run with
+:class:`RunnerError` after saving everything completed; rerunning resumes.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import platform
+import re
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate.data.backends import DaskBackend, PoolBackend
+from surrogate.data.errors import DatasetError, SpaceError
+from surrogate.data.plan import Planned, PlanStats, plan_samples
+from surrogate.data.pool import cpu_count, one_blas_thread
+from surrogate.data.provenance import same_solver, solver_info
+from surrogate.data.space import Space, load_space
+from surrogate.data.store import FEM_SOURCE, Store, new_manifest, utc_now
+
+__all__ = ["GenerateReport", "RunnerError", "generate"]
+
+_SCHEDULER_RE = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
+
+
+class RunnerError(RuntimeError):
+    """The execution backend failed (a worker process died, a Dask worker was lost).
+    Completed samples were saved; rerun the same command to resume."""
+
+
+@dataclass
+class GenerateReport:
+    """Outcome of one :func:`generate` call. Times in seconds, rates in samples per minute."""
+
+    path: Path
+    requested: int
+    already_done: int
+    new_ok: int = 0
+    new_failed: int = 0
+    wall_s: float = 0.0
+    backend: str = "processes"
+    workers: int = 0
+    parts_written: int = 0
+    plan: PlanStats = field(default_factory=PlanStats)
+
+    @property
+    def new(self) -> int:
+        """Samples computed in this call."""
+        return self.new_ok + self.new_failed
+
+    @property
+    def rate_per_min(self) -> float:
+        """Samples per minute of wall time in this call (0 when nothing ran)."""
+        return 60.0 * self.new / self.wall_s if self.wall_s > 0 and self.new else 0.0
+
+
+# --------------------------------------------------------------------------- the runner
+
+
+def _check_args(n: Any, workers: Any, chunk: Any, flush_every: Any, flush_seconds: Any,
+                scheduler: Any) -> None:
+    def positive_int(name: str, value: Any) -> None:
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+            raise SpaceError(name, f"{name} = {value!r}: need an integer >= 1")
+
+    positive_int("n", n)
+    for name, value in (("workers", workers), ("chunk", chunk)):
+        if value is not None:
+            positive_int(name, value)
+    positive_int("flush_every", flush_every)
+    if not isinstance(flush_seconds, int | float) or not 0 < flush_seconds <= 3600:
+        raise SpaceError("flush_seconds", f"flush_seconds = {flush_seconds!r}: need "
+                         "0 < flush_seconds <= 3600")
+    if isinstance(scheduler, str) and not _SCHEDULER_RE.match(scheduler):
+        raise SpaceError("scheduler", f"scheduler = {scheduler!r}: expected tcp://HOST:PORT "
+                         "(or tls://HOST:PORT)")
+    if scheduler is not None and workers is not None:
+        raise SpaceError("workers", "workers applies to the local process pool; with a "
+                         "scheduler the cluster's workers are used")
+
+
+def _check_compatible(store: Store, space: Space, solver: Mapping[str, Any],
+                      allow_solver_change: bool) -> None:
+    m = store.manifest
+    if m.get("space_hash") != space.space_hash():
+        raise DatasetError("space", f"{store.path} was generated from a different space "
+                           f"({m['space']['space'].get('name')!r}, hash "
+                           f"{str(m.get('space_hash'))[:12]}) than the one given "
+                           f"({space.name!r}, hash {space.space_hash()[:12]}); write to "
+                           "another dataset directory")
+    old = m.get("solver", {})
+    if not same_solver(old, solver) and not allow_solver_change:
+        raise DatasetError("allow_solver_change",
+                           f"{store.path} holds results of solver {old.get('version')} "
+                           f"({old.get('hash')}, git {old.get('git_revision')}); the installed "
+                           f"solver is {solver['version']} ({solver['hash']}, git "
+                           f"{solver['git_revision']}) and gives other numbers. Mixing them "
+                           "needs allow_solver_change (--allow-solver-change; recorded in the "
+                           "manifest and per row)")
+
+
+def generate(space: Space | str | Path, n: int, out: str | Path, *,
+             scheduler: Any = None, workers: int | None = None, chunk: int | None = None,
+             flush_every: int = 256, flush_seconds: float = 10.0, progress: bool = True,
+             allow_solver_change: bool = False, command: str = "") -> GenerateReport:
+    """Make dataset ``out`` hold the first ``n`` distinct feasible samples of ``space``.
+
+    ``space`` is a :class:`Space` or a TOML path; ``scheduler`` None (local process pool of
+    ``workers`` processes, default all cores), "tcp://HOST:PORT" or a ``distributed.Client``.
+    ``chunk`` samples go to a worker per task (default adaptive). Everything is validated
+    before anything is written: bad input raises :class:`SpaceError` or
+    :class:`DatasetError` and leaves the disk untouched."""
+    _check_args(n, workers, chunk, flush_every, flush_seconds, scheduler)
+    if not isinstance(space, Space):
+        space = load_space(space)
+    out = Path(out)
+    solver = solver_info()
+    store = None
+    if Store.exists(out):
+        store = Store.open(out)
+        _check_compatible(store, space, solver, allow_solver_change)
+    elif out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise DatasetError("out", f"{out} exists and is not a hapticrom dataset (nor an empty "
+                           "directory)")
+    planned, stats = plan_samples(space, int(n))
+    backend: Any = DaskBackend(scheduler) if scheduler is not None else None
+    try:
+        if store is None:
+            store = Store.create(out, space, **new_manifest(space, solver))
+        with store.lock():
+            store.remove_temp_files()
+            return _run(store, space, planned, stats, solver, backend, workers, chunk,
+                        flush_every, flush_seconds, progress, allow_solver_change, command)
+    finally:
+        if backend is not None:
+            backend.close(cancel=True)
+
+
+def _todo(store: Store, planned: Sequence[Planned], allow_solver_change: bool) -> list[Planned]:
+    keys, by_index = store.keys()
+    done_ids = {sid for src, sid in keys if src == FEM_SOURCE}
+    todo = []
+    for p in planned:
+        if p.sample_id in done_ids:
+            continue
+        if p.index in by_index:
+            if not allow_solver_change:
+                raise DatasetError("allow_solver_change", f"sample {p.index} is stored with "
+                                   f"id {by_index[p.index][:12]} but now resolves to "
+                                   f"{p.sample_id[:12]}: the scene schema or its defaults "
+                                   "changed since the dataset was generated; write to another "
+                                   "dataset, or allow_solver_change to keep the old rows")
+            continue
+        todo.append(p)
+    return todo
+
+
+def _run(store: Store, space: Space, planned: list[Planned], stats: PlanStats,
+         solver: Mapping[str, Any], backend: Any, workers: int | None, chunk: int | None,
+         flush_every: int, flush_seconds: float, progress: bool, allow_solver_change: bool,
+         command: str) -> GenerateReport:
+    m = store.manifest
+    if not same_solver(m["solver"], solver):
+        m["solver"] = dict(solver)
+        m["solver_history"].append(dict(solver, first_used=utc_now()))
+    todo = _todo(store, planned, allow_solver_change)
+    sampling = m["sampling"]
+    sampling["target_n"] = max(int(sampling.get("target_n", 0)), len(planned))
+    if stats.scanned >= int(sampling.get("scanned", 0)):
+        sampling.update(scanned=stats.scanned, rejected=stats.rejected,
+                        duplicates=stats.duplicates)
+    report = GenerateReport(store.path, len(planned), len(planned) - len(todo), plan=stats)
+    run = {"started": utc_now(), "finished": None, "command": command, "host":
+           platform.node(), "python": sys.version.split()[0], "solver_hash": solver["hash"],
+           "target_n": len(planned), "todo": len(todo)}
+    m["runs"].append(run)
+    store.save_manifest()
+    if not todo:
+        run.update(finished=utc_now(), new_ok=0, new_failed=0)
+        store.save_manifest()
+        return report
+    own_backend = backend is None
+    with one_blas_thread() if own_backend else contextlib.nullcontext():
+        if own_backend:
+            backend = PoolBackend(workers or cpu_count())
+        report.backend, report.workers = backend.name, backend.workers
+        run.update(backend=backend.name, workers=backend.workers)
+        t0 = time.perf_counter()
+        try:
+            _execute(store, todo, solver, backend, chunk, flush_every, flush_seconds, progress,
+                     report)
+        finally:
+            report.wall_s = time.perf_counter() - t0
+            if own_backend:
+                backend.close(cancel=True)
+            run.update(finished=utc_now(), new_ok=report.new_ok, new_failed=report.new_failed,
+                       wall_s=round(report.wall_s, 3),
+                       rate_per_min=round(report.rate_per_min, 1))
+            store.save_manifest()
+    return report
+
+
+
+def _chunks(todo: Sequence[Planned], size: int) -> collections.deque[list[Planned]]:
+    return collections.deque(list(todo[i : i + size]) for i in range(0, len(todo), size))
+
+
+def _execute(store: Store, todo: list[Planned], solver: Mapping[str, Any], backend: Any,
+             chunk: int | None, flush_every: int, flush_seconds: float, progress: bool,
+             report: GenerateReport) -> None:
+    from tqdm import tqdm
+
+    size = chunk or max(1, min(32, len(todo) // (backend.workers * 16)))
+    queue = _chunks(todo, size)
+    pending: dict[Any, list[Planned]] = {}
+    buffer: list[dict[str, Any]] = []
+    last_flush = time.monotonic()
+    total = report.requested
+
+    def flush() -> None:
+        nonlocal last_flush
+        if buffer:
+            buffer.sort(key=lambda r: r["sample_index"])
+            store.write_part(buffer, {"source": FEM_SOURCE, "solver": dict(solver),
+                                      "written": utc_now()})
+            report.parts_written += 1
+            buffer.clear()
+        last_flush = time.monotonic()
+
+    bar = tqdm(total=total, initial=report.already_done, unit="sample", dynamic_ncols=True,
+               disable=not progress, file=sys.stderr, smoothing=0.05, desc=store.path.name)
+    try:
+        while queue or pending:
+            while queue and len(pending) < 2 * backend.workers + 1:
+                items = queue.popleft()
+                pending[backend.submit(json.dumps([p.scene for p in items]))] = items
+            for fut in backend.wait(list(pending), timeout=min(flush_seconds, 1.0)):
+                items = pending.pop(fut)
+                outs = _chunk_rows(fut, items, solver)
+                for p, o in zip(items, outs, strict=True):
+                    buffer.append(_row(p, o, solver))
+                    _note_grid(store, o)
+                    if o["status"] == "ok":
+                        report.new_ok += 1
+                    else:
+                        report.new_failed += 1
+                bar.update(len(items))
+                bar.set_postfix(failed=report.new_failed, refresh=False)
+            if buffer and (len(buffer) >= flush_every
+                           or time.monotonic() - last_flush >= flush_seconds):
+                flush()
+    finally:
+        for fut in pending:
+            fut.cancel()
+        flush()  # whatever completed is valid data, also on Ctrl-C or a backend failure
+        bar.close()
+
+
+def _chunk_rows(fut: Any, items: Sequence[Planned], solver: Mapping[str, Any]
+                ) -> list[dict[str, Any]]:
+    try:
+        reply = json.loads(fut.result())
+    except Exception as err:
+        raise RunnerError(f"the execution backend failed while running samples "
+                          f"{items[0].index}..{items[-1].index}: {type(err).__name__}: {err}. "
+                          "Completed samples were saved; rerun the same command to resume"
+                          ) from err
+    if reply["solver"] != solver["fingerprint"]:
+        # e.g. a cluster worker with another installation, or fem edited during the run
+        raise RunnerError(f"a worker runs solver {reply['solver'][:12]}, not the "
+                          f"{solver['hash']} this run records; its results were discarded. "
+                          "Install the same hapticrom on every worker, then rerun")
+    return list(reply["rows"])
+
+
+def _row(p: Planned, out: Mapping[str, Any], solver: Mapping[str, Any]) -> dict[str, Any]:
+    return {**out, **p.values, "sample_id": p.sample_id, "sample_index": p.index,
+            "source": FEM_SOURCE, "solver_version": solver["version"],
+            "solver_hash": solver["hash"],
+            "scene_json": json.dumps(p.scene, sort_keys=True, separators=(",", ":"))}
+
+
+def _note_grid(store: Store, out: Mapping[str, Any]) -> None:
+    grid = out.get("profile_distance_mm")
+    if out.get("status") == "ok" and grid and store.manifest.get("profile_grid_mm") is None:
+        store.manifest["profile_grid_mm"] = [float(g) for g in grid]

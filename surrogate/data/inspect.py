@@ -1,0 +1,206 @@
+"""Dataset tools over a store: summary (``dataset_info``), checks (``validate_dataset``) and
+``merge_datasets``. The command line's ``hapticrom dataset info|validate|merge`` call these."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+
+from surrogate.data.errors import DatasetError
+from surrogate.data.provenance import solver_key
+from surrogate.data.space import Space
+from surrogate.data.store import FEM_SOURCE, STATUSES, Store
+
+__all__ = ["dataset_info", "merge_datasets", "validate_dataset"]
+
+def dataset_info(path: str | Path) -> dict[str, Any]:
+    """Summary of a dataset: manifest essentials plus counts computed from the parts."""
+    store = Store.open(path)
+    m = store.manifest
+    space = m["space"]["space"]
+    counts = store.counts()
+    runs = m.get("runs", [])
+    return {
+        "path": str(store.path), "space": space.get("name"), "space_hash": m.get("space_hash"),
+        "parameters": [p["name"] for p in m["space"].get("parameter", [])],
+        "sampling": m.get("sampling"), "solver": m.get("solver"),
+        "solver_versions": sorted({s.get("version", "?") + "+" + s.get("hash", "?")
+                                   for s in m.get("solver_history", [])}),
+        "analysis_kind": m.get("analysis_kind"), "mesh": m.get("mesh"),
+        "profile_grid_mm": m.get("profile_grid_mm"), **counts,
+        "bytes": sum(p.stat().st_size for p in store.parts()),
+        "temp_files": len(store.temp_files()),
+        "runs": len(runs), "interrupted_runs": sum(1 for r in runs if r.get("finished") is None),
+        "merged_from": m.get("merged_from"),
+    }
+
+
+def validate_dataset(path: str | Path, rehash: bool = False) -> list[str]:
+    """Check a dataset; return a list of problems (empty when valid).
+
+    Checks: every part readable with exactly the dataset schema; no (source, sample_id)
+    twice; generated rows have unique sample indices (unless merged); statuses are "ok" or
+    "failed"; failed rows carry error text; generated ok rows have finite amplitudes and a
+    profile on the manifest grid; parameter values lie in the space; each part's solver is
+    in the manifest history. ``rehash`` recomputes every sample_id from scene_json."""
+    store = Store.open(path)
+    problems: list[str] = []
+    schema = store.schema
+    tables = []
+    for part in store.parts():
+        try:
+            t = store.read_part(part)
+        except DatasetError as err:
+            problems.append(str(err))
+            continue
+        if not t.schema.remove_metadata().equals(schema):
+            problems.append(f"{part.name}: schema differs from the dataset schema")
+            continue
+        problems += _check_part_solver(store, part)
+        tables.append(t.replace_schema_metadata(None))
+    if not tables:
+        return problems
+    df = pa.concat_tables(tables).to_pandas()
+    problems += _check_rows(store, df)
+    if rehash:
+        problems += _check_hashes(df)
+    return problems
+
+
+def _check_part_solver(store: Store, part: Path) -> list[str]:
+    solver = store.part_metadata(part).get("solver")
+    known = {solver_key(s) for s in store.manifest.get("solver_history", [])}
+    if solver and solver_key(solver) not in known:
+        return [f"{part.name}: written by solver {solver.get('version')} "
+                f"({solver.get('hash')}), which the manifest does not list"]
+    return []
+
+
+def _check_rows(store: Store, df: Any) -> list[str]:
+    problems = []
+    dup = df.duplicated(["source", "sample_id"])
+    if dup.any():
+        problems.append(f"{int(dup.sum())} rows repeat a (source, sample_id): "
+                        f"{df.loc[dup, 'sample_id'].head(3).tolist()}")
+    fem = df["source"] == FEM_SOURCE
+    if not store.manifest.get("merged_from") and df.loc[fem, "sample_index"].duplicated().any():
+        problems.append("generated rows repeat a sample_index")
+    bad_status = ~df["status"].isin(STATUSES)
+    if bad_status.any():
+        problems.append(f"{int(bad_status.sum())} rows have a status other than ok/failed")
+    no_error = (df["status"] == "failed") & (df["error"].isna() | (df["error"] == ""))
+    if no_error.any():
+        problems.append(f"{int(no_error.sum())} failed rows have no error text")
+    ok_fem = fem & (df["status"] == "ok")
+    for col in ("edge_amplitude_um", "center_amplitude_um"):
+        vals = df.loc[ok_fem, col].to_numpy(dtype=float)
+        if vals.size and not np.all(np.isfinite(vals)):
+            problems.append(f"generated ok rows with non-finite {col}")
+    problems += _check_profiles(store, df.loc[ok_fem])
+    problems += _check_ranges(store.space, df)
+    return problems
+
+
+def _check_profiles(store: Store, ok: Any) -> list[str]:
+    grid = store.manifest.get("profile_grid_mm")
+    problems = []
+    for sid, d, a in zip(ok["sample_id"], ok["profile_distance_mm"],
+                         ok["profile_magnitude_um"], strict=True):
+        if d is None or a is None or len(d) != len(a):
+            problems.append(f"sample {sid[:12]}: missing or ragged profile")
+        elif grid is not None and (len(d) != len(grid) or not np.allclose(d, grid, atol=1e-9)):
+            problems.append(f"sample {sid[:12]}: profile grid differs from the manifest's")
+        if len(problems) >= 5:
+            break
+    return problems
+
+
+def _check_ranges(space: Space, df: Any) -> list[str]:
+    problems = []
+    for p in space.parameters:
+        col = df[p.name]
+        if p.type in ("continuous", "integer"):
+            bad = col.isna() | (col < p.low) | (col > p.high)
+        elif p.type == "categorical":
+            bad = ~col.isin(list(p.choices))
+        else:
+            bad = col != p.value
+        if bad.any():
+            problems.append(f"{int(bad.sum())} rows have {p.name} outside the space "
+                            f"({p.allowed()}), e.g. {col[bad].iloc[0]!r}")
+    return problems
+
+
+def _check_hashes(df: Any) -> list[str]:
+    from fem.scene import SceneError, scene_from_dict, scene_hash
+
+    problems = []
+    for sid, text in zip(df["sample_id"], df["scene_json"], strict=True):
+        try:
+            actual = scene_hash(scene_from_dict(json.loads(text)))
+        except (TypeError, ValueError, SceneError) as err:
+            problems.append(f"sample {sid[:12]}: scene_json unreadable: {err}")
+            continue
+        if actual != sid:
+            problems.append(f"sample {sid[:12]}: scene_json hashes to {actual[:12]}")
+    return problems
+
+
+def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
+                   allow_mixed_solvers: bool = False,
+                   rows_per_part: int = 50_000) -> dict[str, Any]:
+    """Write the union of ``inputs`` to a new dataset ``out`` (compacted into few parts).
+
+    Inputs must have the same parameter columns; a row present in several inputs (same
+    source and sample_id) is kept once, an "ok" copy before a "failed" one. Different solver
+    versions need ``allow_mixed_solvers``. Only a merge of datasets from one space can be
+    extended by ``generate``. Returns counts; validates everything before writing."""
+    if not inputs:
+        raise DatasetError("inputs", "merge needs at least one input dataset")
+    out = Path(out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise DatasetError("out", f"{out} exists and is not empty; merge writes a new dataset")
+    stores = [Store.open(p) for p in inputs]
+    first = stores[0]
+    for s in stores[1:]:
+        if s.schema.remove_metadata() != first.schema.remove_metadata():
+            raise DatasetError(str(s.path), f"{s.path} has other columns than {first.path}; "
+                               "only datasets over the same parameters can be merged")
+    solvers = {solver_key(h): h
+               for s in stores for h in s.manifest.get("solver_history", [])}
+    if len(solvers) > 1 and not allow_mixed_solvers:
+        listed = ", ".join(f"{v} ({str(h)[:12]})" for v, h in solvers)
+        raise DatasetError("allow_mixed_solvers", f"the inputs were computed by different "
+                           f"solvers ({listed}); allow_mixed_solvers (--allow-mixed-solvers) "
+                           "merges anyway")
+    table = pa.concat_tables([s.read_table() for s in stores])
+    df = table.to_pandas()
+    # lexsort: the last key is the primary one -> ok rows first, then input order
+    order = np.lexsort((np.arange(len(df)), df["status"].ne("ok").to_numpy()))
+    keep = ~df.iloc[order].duplicated(["source", "sample_id"]).to_numpy()
+    rows = np.sort(order[keep])
+    merged = table.take(pa.array(rows))
+    hashes = {s.manifest.get("space_hash") for s in stores}
+    manifest = {k: v for k, v in first.manifest.items()
+                if k not in ("format", "schema_version", "created", "space", "space_hash",
+                             "columns", "runs", "updated")}
+    manifest.update(solver_history=list(solvers.values()), merged_from=[
+        {"path": str(s.path), "space_hash": s.manifest.get("space_hash"),
+         "rows": s.counts()["rows"]} for s in stores])
+    new = Store.create(out, first.space, **manifest)
+    if len(hashes) > 1:
+        new.manifest["space_hash"] = None  # not extendable: the inputs sampled other spaces
+        new.manifest["spaces"] = sorted(h for h in hashes if h)
+        new.save_manifest()
+    with new.lock():
+        for start in range(0, max(merged.num_rows, 1), rows_per_part):
+            chunk = merged.slice(start, rows_per_part)
+            if chunk.num_rows:
+                new.write_part(chunk, {"source": "merge"})
+    return {"rows_in": table.num_rows, "rows_out": merged.num_rows,
+            "duplicates_dropped": table.num_rows - merged.num_rows, "parts": len(new.parts())}

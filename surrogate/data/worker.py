@@ -1,0 +1,111 @@
+"""The worker side of generation: one scene dict in, one row of output columns out.
+
+Plain JSON strings cross the process (or Dask) boundary, so no solver object is ever pickled,
+and every sample is computed from its scene alone. Output columns are read from the typed
+attributes of :class:`fem.simulation.SimulationResult`, so a renamed result field fails loudly
+instead of storing nulls.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import time
+import traceback
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate.data.provenance import solver_info
+
+__all__ = ["outputs_from_result", "run_chunk", "run_sample", "worker_solver_hash"]
+
+
+def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
+    """Solve one scene dict; return output columns plus status, error, wall_s [s], dofs.
+
+    Never raises for a bad sample: the exception becomes ``status = "failed"`` with its text.
+    The result depends on the scene only."""
+    from fem.scene import scene_from_dict
+    from fem.simulation import simulate
+
+    t0 = time.perf_counter()
+    try:
+        out = outputs_from_result(simulate(scene_from_dict(scene)))
+        bad = _non_finite(out)
+        out["status"], out["error"] = ("failed", f"NonFiniteResult: {bad}") if bad else ("ok",
+                                                                                         None)
+    except Exception as err:  # a failed sample is data, not a crash
+        out = {"status": "failed", "error": _error_text(err)}
+    out["wall_s"] = time.perf_counter() - t0
+    return out
+
+
+def run_chunk(payload: str) -> str:
+    """Worker entry point: JSON list of scene dicts in; JSON ``{"solver": hash, "rows":
+    [output dicts]}`` out, ``solver`` being the fingerprint of the solver this worker runs.
+
+    Plain strings cross the process boundary, so no solver object is ever pickled."""
+    rows = [run_sample(scene) for scene in json.loads(payload)]
+    return json.dumps({"solver": worker_solver_hash(), "rows": rows})
+
+
+@functools.cache
+def worker_solver_hash() -> str:
+    """The fingerprint of the solver this process runs (computed once per process)."""
+    return str(solver_info(git=False)["fingerprint"])
+
+
+def outputs_from_result(res: Any) -> dict[str, Any]:
+    """Dataset output columns (amplitudes in um, distances in mm) of a
+    :class:`fem.simulation.SimulationResult`."""
+    from fem.results import magnitude
+
+    out: dict[str, Any] = {
+        "center_amplitude_um": res.center_amplitude_um,
+        "edge_amplitude_um": res.edge_amplitude_um,
+        "normalized_edge": res.normalized_edge,
+        "profile_distance_mm": res.profile_mm.tolist(),
+        "profile_uz_um": (np.abs(res.profile[:, 1]) * 1e6).tolist(),
+        "profile_magnitude_um": (magnitude(res.profile) * 1e6).tolist(),
+        "dofs": int(res.meta["dofs"]),
+        "elements": int(res.meta["elements"]),
+        "warnings": "; ".join(str(w) for w in res.meta.get("warnings", [])) or None,
+    }
+    h = res.histories
+    if h is not None:
+        probes = h.radii[: res.r_mm.size]
+        out["history_t_s"] = h.t.tolist()
+        out["history_r_mm"] = (probes * 1e3).tolist()
+        out["history_uz_um"] = (h.u[:, : probes.size, 1].T * 1e6).tolist()
+        out["history_magnitude_um"] = (magnitude(h.u[:, : probes.size]).T * 1e6).tolist()
+    return out
+
+
+def _non_finite(out: Mapping[str, Any]) -> str:
+    for key, value in out.items():
+        if value is None or isinstance(value, str):
+            continue
+        flat = _flat(value)
+        if flat.size and not np.all(np.isfinite(flat)):
+            return f"{key} contains NaN or inf"
+    return ""
+
+
+def _flat(value: Any) -> np.ndarray:
+    if isinstance(value, list) and value and isinstance(value[0], list):
+        return np.concatenate([_flat(v) for v in value])
+    return np.asarray(value, dtype=float).ravel()
+
+
+def _error_text(err: BaseException) -> str:
+    text = "".join(traceback.format_exception_only(type(err), err)).strip()
+    tb = traceback.extract_tb(err.__traceback__)
+    if tb:
+        frame = tb[-1]
+        text += f" (at {Path(frame.filename).name}:{frame.lineno} in {frame.name})"
+    return text
+
+

@@ -1,0 +1,39 @@
+"""Shared test fixtures. Tests live in folders mirroring the packages (``tests/fem``,
+``tests/fieldspec``, ...) without ``__init__.py``; helpers shared within a folder are plain
+modules beside the tests (``tests/fem/fem_cases.py``, ``tests/fem/analytic.py``)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+# pytest puts this folder on sys.path, where the test folders ``fem/`` and ``fieldspec/`` would
+# be namespace packages shadowing the real ones when the package is installed in editable mode
+# (its import hook runs after the path search). With the repository root on sys.path the real,
+# regular packages are found first wherever pytest is started.
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _run_from_repo_root() -> Iterator[None]:
+    """Tests name example scenes relative to the repository root ("examples/forearm.toml"):
+    run them from there wherever pytest was started."""
+    previous = Path.cwd()
+    os.chdir(REPO)
+    try:
+        yield
+    finally:
+        os.chdir(previous)
+
+
+@pytest.fixture(scope="session")
+def examples_dir() -> Path:
+    """The directory of the commented example scenes."""
+    return REPO / "examples"
