@@ -48,7 +48,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from fem.reproduce import reproduce
+    from studies.guo2025 import reproduce
 
     reproduce(args.out, workers=args.workers, quick=args.quick)
     return 0
