@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -128,7 +129,8 @@ def check_motor(r: Mapping[str, Solved], ctx: Context) -> Section:
     rotor, alt = rotor_mm(ctx)
     heads = [f"{'rotor' if 'rotor' in path else 'mass'} {v:g} {'mm' if 'rotor' in path else 'g'}"
              for (path, v), in MOTOR_VARIANTS.values()]
-    swap = math.isclose(alt, motor.height_mm - rotor)
+    flipped = replace(ctx.example(BARE).unit, orientation="reverse")  # fem defines the flip
+    swap = math.isclose(alt, flipped.rotor_above_base_mm)
     text = ("Normalized edge, magnitude (abs U_z in brackets), with the motor's defaults "
             f"({motor.mass_g:g} g, rotor plane {rotor:g} mm above the base face) and with one of "
             "them changed; ring contact as in the studies. The paper gives neither; the "

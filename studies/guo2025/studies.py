@@ -24,6 +24,7 @@ from .cases import (
     uniform_name,
 )
 from .paper import (
+    COMMON,
     LETTERS,
     PAPER_POGO_RATIO,
     PAPER_R2,
@@ -317,8 +318,11 @@ def _bulk_text(sweeps: Mapping[str, Sequence[float]]) -> str:
     """The end of the sweep discussion: how far the Poisson table moves the bulk modulus."""
     if "nu" not in sweeps:
         return "show."
+    from fem.materials import Material
+
     lo, hi = min(sweeps["nu"]), max(sweeps["nu"])
-    k_ratio = (1 - 2 * lo) / (1 - 2 * hi)
+    E_Pa, rho = COMMON[1] * 1e3, COMMON[0]
+    k_ratio = (Material("hi", E_Pa, rho, hi).bulk_Pa / Material("lo", E_Pa, rho, lo).bulk_Pa)
     return ("show. Poisson's ratio acts through the bulk modulus K = E / (3 (1 - 2 nu)), which "
             f"changes x{k_ratio:.3g} between nu = {lo:g} and {hi:g} although nu itself changes "
             f"only x{hi / lo:.3g}.")
