@@ -21,7 +21,8 @@ class Solved:
 
     Attributes:
         edge_mm: the unit's outer radius (mm).
-        centre: the unit's skin-side face on the axis (fem.unit); edge: skin at edge_mm.
+        centre: the unit's skin-side face on the axis (the solver's haptic unit); edge: skin at
+            edge_mm.
         skin_axis: the skin surface on the axis; top_axis: the motor's top face on the axis
             (NaN for a transient).
         profile_mm: distance from the edge (mm); profile: (n, 3) skin amplitudes there.
