@@ -1,6 +1,7 @@
-"""`hapticrom reproduce`: the quick run writes a complete report whose numbers are what
-`simulate` returns (also under every ring contact), whose narrative agrees with its own tables,
-bad arguments exit 2 without writing, and the report helpers are exact on analytic inputs."""
+"""`hapticrom reproduce` (studies.guo2025): the quick run writes a complete report whose numbers
+are what `simulate` returns (also under every ring contact), whose narrative agrees with its
+own tables, bad arguments exit 2 without writing, and the report helpers are exact on
+analytic inputs."""
 
 import json
 import math
@@ -9,11 +10,15 @@ import re
 import numpy as np
 import pytest
 
-from fem import reproduce as rp
+from fem import SOLVER_VERSION
 from fem.problem import resolve_effects
 from fem.scene import SceneError, Unit, load_scene, scene_from_dict, scene_to_dict
 from fem.simulate import simulate
 from hapticrom.cli import main
+from studies.guo2025 import cases, paper, run
+from studies.guo2025 import contact as ct
+from studies.guo2025 import studies as st
+from studies.guo2025.outdir import MARKER
 
 FIGURES = ("structure.png", "single_layers.png", "triples.png", "sweeps.png", "ring_contact.png")
 CONTACT = "### (g) How the inner ring meets the motor"
@@ -71,8 +76,9 @@ def test_report_figures_and_json_exist_and_no_temporaries_remain(report):
         raise AssertionError(f"results.json is not strict JSON: {name}")
 
     doc = json.loads((out / "results.json").read_text(), parse_constant=no_constants)
-    assert doc["solver_version"] == rp.SOLVER_VERSION and doc["run"]["quick"] is True
+    assert doc["solver_version"] == SOLVER_VERSION and doc["run"]["quick"] is True
     assert sorted(p.name for p in parent.iterdir()) == ["report"]
+    assert (out / MARKER).is_file()
 
 
 def test_every_study_has_a_table_and_the_run_is_described(report):
@@ -86,7 +92,7 @@ def test_every_study_has_a_table_and_the_run_is_described(report):
         assert "\n|---|" in section, a
     for table in ("Table 2", "Table 3", "Table 4"):
         assert table in text
-    assert rp.SOLVER_VERSION in text and "hapticrom reproduce" in text
+    assert SOLVER_VERSION in text and "hapticrom reproduce" in text
     assert re.search(r"wall time \d+\.\d s", text)
     assert "Quick run" in text
     section = _section(text, CONTACT)
@@ -94,9 +100,9 @@ def test_every_study_has_a_table_and_the_run_is_described(report):
 
 
 def test_single_layer_numbers_equal_an_independent_simulate(report):
-    """Single layer C, forward, glued, rebuilt here from the example without fem.reproduce."""
+    """Single layer C, forward, glued, rebuilt here from the example without the study package."""
     _, _, text = report
-    d = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-bare-forward.toml"))
+    d = scene_to_dict(load_scene(cases.SCENES_DIR / "unit-bare-forward.toml"))
     d["unit"].update(orientation="forward", attachment="glued",
                      encapsulation=["dragon-skin-10-medium"])
     res = simulate(scene_from_dict(d))
@@ -124,8 +130,8 @@ def test_acd_appears_with_its_rank_consistent_with_the_ranked_table(report):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--workers", "0"], "--workers"),
-    (["--workers", "-3"], "--workers"),
+    (["--workers", "0"], "workers = 0"),
+    (["--workers", "-3"], "workers = -3"),
 ])
 def test_bad_workers_exit_2_and_write_nothing(tmp_path, capsys, args, message):
     out = tmp_path / "report"
@@ -147,23 +153,6 @@ def test_non_integer_workers_is_a_usage_error(tmp_path):
     assert exc.value.code == 2
 
 
-def test_atomic_dir_replaces_whole_and_keeps_the_old_on_failure(tmp_path):
-    out = tmp_path / "rep"
-    out.mkdir()
-    (out / "stale.md").write_text("old")
-    rp._atomic_dir(out, lambda d: (d / "new.md").write_text("new"))
-    assert sorted(p.name for p in out.iterdir()) == ["new.md"]
-
-    def fail(d):
-        (d / "half.md").write_text("half")
-        raise RuntimeError("boom")
-
-    with pytest.raises(RuntimeError):
-        rp._atomic_dir(out, fail)
-    assert sorted(p.name for p in out.iterdir()) == ["new.md"]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
-
-
 def _fake(edge_um: float = 1.0, centre_um: float = 1.0, profile=None, step_mm: float = 1.0):
     """A Solved with given magnitudes (all motion in U_r) and an optional profile (fractions of
     the centre amplitude)."""
@@ -171,7 +160,7 @@ def _fake(edge_um: float = 1.0, centre_um: float = 1.0, profile=None, step_mm: f
     u = np.zeros((profile.size, 3), complex)
     u[:, 0] = profile * centre_um * 1e-6
     vec = np.array([1e-6, 0.0, 0.0], complex)
-    return rp.Solved(edge_mm=5.0, centre=centre_um * vec, edge=edge_um * vec,
+    return run.Solved(edge_mm=5.0, centre=centre_um * vec, edge=edge_um * vec,
                      skin_axis=centre_um * vec, top_axis=centre_um * vec,
                      profile_mm=np.arange(profile.size) * step_mm, profile=u,
                      surface_r_mm=np.array([0.0, 5.0]), surface=np.array([centre_um * vec,
@@ -182,9 +171,9 @@ def _fake(edge_um: float = 1.0, centre_um: float = 1.0, profile=None, step_mm: f
 def test_crosstalk_distance_interpolates_the_last_crossing():
     # 0.8 at the edge, falling 0.1 per mm, with a bump back above 0.5 at 4 mm
     s = _fake(profile=[0.8, 0.7, 0.6, 0.45, 0.55, 0.4, 0.3, 0.2, 0.1])
-    assert rp.crosstalk_distance(s, 0.5) == pytest.approx(4.0 + 0.05 / 0.15)
-    assert rp.crosstalk_distance(s, 0.9) == 0.0
-    assert math.isinf(rp.crosstalk_distance(s, 0.05))
+    assert st.crosstalk_distance(s, 0.5) == pytest.approx(4.0 + 0.05 / 0.15)
+    assert st.crosstalk_distance(s, 0.9) == 0.0
+    assert math.isinf(st.crosstalk_distance(s, 0.05))
 
 
 def test_sweep_measures_recover_a_power_law_exactly():
@@ -193,21 +182,21 @@ def test_sweep_measures_recover_a_power_law_exactly():
     def edge(rho, E, nu):
         return rho**-0.3 * E**0.2
 
-    sweeps = {"density": rp.TABLE2_DENSITY, "E": rp.TABLE3_E_KPA, "nu": rp.TABLE4_NU}
+    sweeps = {"density": paper.TABLE2_DENSITY, "E": paper.TABLE3_E_KPA, "nu": paper.TABLE4_NU}
     r = {}
     for name, values in sweeps.items():
-        c = rp._common_value(name)
-        for x in (*values, c * rp.ELASTICITY_STEP, c / rp.ELASTICITY_STEP):
-            point = rp._sweep_point(name, x)
-            r[rp.uniform_name(*point)] = _fake(edge_um=edge(*point), centre_um=1.0)
-    m = {name: rp.sweep_measures(r, name, values) for name, values in sweeps.items()}
+        c = cases.common_value(name)
+        for x in (*values, c * cases.ELASTICITY_STEP, c / cases.ELASTICITY_STEP):
+            point = cases.sweep_point(name, x)
+            r[cases.uniform_name(*point)] = _fake(edge_um=edge(*point), centre_um=1.0)
+    m = {name: st.sweep_measures(r, name, values) for name, values in sweeps.items()}
     assert m["density"]["edge_elasticity"] == pytest.approx(-0.3, abs=1e-9)
     assert m["E"]["edge_elasticity"] == pytest.approx(0.2, abs=1e-9)
     assert m["nu"]["edge_elasticity"] == pytest.approx(0.0, abs=1e-12)
     assert m["density"]["edge_spread"] == pytest.approx(4.0**0.3)
     assert m["E"]["edge_spread"] == pytest.approx(240.0**0.2)
     assert m["density"]["edge_slope_over_range"] == pytest.approx(-0.3)
-    section = rp.study_sweeps(r, sweeps)
+    section = st.study_sweeps(r, sweeps)
     local = next(c for c in section.claims if "d ln(edge)" in c[0])
     assert local[3] == "agrees" and local[2].startswith("density")
     spread = next(c for c in section.claims if "edge amplitude max/min" in c[0])
@@ -217,14 +206,14 @@ def test_sweep_measures_recover_a_power_law_exactly():
 @pytest.mark.parametrize("contact", ["none", "bonded"])
 def test_ring_contact_cells_equal_an_independent_simulate(report, contact):
     """Single layer B and A-C-D on pins under a non-default contact, rebuilt from the examples
-    without fem.reproduce, match the (g) table cell by cell."""
+    without the study package, match the (g) table cell by cell."""
     _, _, text = report
     section = _section(text, CONTACT)
     col = _contact_columns(section)[contact]
-    single = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-bare-forward.toml"))
+    single = scene_to_dict(load_scene(cases.SCENES_DIR / "unit-bare-forward.toml"))
     single["unit"].update(orientation="forward", attachment="glued", ring_contact=contact,
                           encapsulation=["ecoflex-00-50"])
-    triple = scene_to_dict(load_scene(rp.EXAMPLES_DIR / "unit-triple-reverse-pogo.toml"))
+    triple = scene_to_dict(load_scene(cases.SCENES_DIR / "unit-triple-reverse-pogo.toml"))
     triple["unit"]["ring_contact"] = contact
     for name, d in (("single/B", single), ("triple/ACD", triple)):
         res = simulate(scene_from_dict(d))
@@ -256,7 +245,7 @@ def test_the_literal_ties_are_reported_as_refused_by_the_solver(report):
     (and a static solve) of the A-C-D unit, and accepts both for the other contacts."""
     _, _, text = report
     section = _section(text, CONTACT)
-    d = rp.scene_dict(rp.Case(rp.TRIPLE, rp.contact_edit("none"), transient=True))
+    d = cases.scene_dict(cases.Case(cases.TRIPLE, cases.contact_edit("none"), transient=True))
     with pytest.raises(SceneError) as err:
         resolve_effects(scene_from_dict(d))
     assert str(err.value) in section
@@ -265,7 +254,8 @@ def test_the_literal_ties_are_reported_as_refused_by_the_solver(report):
     assert posed["none"].startswith("no") and "static and transient" in posed["none"]
     assert posed["frictionless"] == posed["bonded"] == "yes"
     for contact in ("frictionless", "bonded"):
-        d = rp.scene_dict(rp.Case(rp.TRIPLE, rp.contact_edit(contact), transient=True))
+        d = cases.scene_dict(cases.Case(cases.TRIPLE, cases.contact_edit(contact),
+                                        transient=True))
         resolve_effects(scene_from_dict(d))  # accepted
 
 
@@ -309,23 +299,23 @@ def test_run_cases_adds_the_follow_up_once_its_needs_are_solved(monkeypatch):
         calls.append(d["unit"]["ring_contact"])
         return _fake(edge_um=len(calls))
 
-    monkeypatch.setattr(rp, "solve_scene", fake_solve)
+    monkeypatch.setattr(run, "solve_scene", fake_solve)
     seen = []
 
     def make(r):
         seen.append(sorted(r))
-        return {"x/none": rp.triple_case("ACD", rp.contact_edit("none")),
-                "x/default": rp.triple_case("ACD", rp.contact_edit(Unit().ring_contact))}
+        return {"x/none": cases.triple_case("ACD", cases.contact_edit("none")),
+                "x/default": cases.triple_case("ACD", cases.contact_edit(Unit().ring_contact))}
 
-    cases = {"triple/ACD": rp.triple_case("ACD"), "single/A": rp.single_case("A")}
-    r = rp.run_cases(cases, 1, log=lambda _: None,
-                     follow=rp.FollowUp(("triple/ACD",), make))
+    plan = {"triple/ACD": cases.triple_case("ACD"), "single/A": cases.single_case("A")}
+    r = run.run_cases(plan, 1, log=lambda _: None,
+                     follow=cases.FollowUp(("triple/ACD",), make))
     assert seen == [["triple/ACD"]]
     assert sorted(r) == ["single/A", "triple/ACD", "x/default", "x/none"]
     assert r["x/default"] is r["triple/ACD"]  # the default contact is the same scene
     assert len(calls) == 3 and calls.count("none") == 1
     with pytest.raises(ValueError, match="not in the plan"):
-        rp.run_cases(cases, 1, log=lambda _: None, follow=rp.FollowUp(("triple/DDD",), make))
+        run.run_cases(plan, 1, log=lambda _: None, follow=cases.FollowUp(("triple/DDD",), make))
 
 
 def test_closest_readings_uses_a_symmetric_distance_from_the_paper():
@@ -336,7 +326,7 @@ def test_closest_readings_uses_a_symmetric_distance_from_the_paper():
 
     table = {"a": {"r1": cell(0.5, 1.05), "r2": cell(1.9, 1.0)},
              "b": {"r1": cell(1.1, 3.0), "r2": cell(1.6, 1.5)}}
-    best = rp.closest_readings(table)
+    best = ct.closest_readings(table)
     assert (best["min"]["contact"], best["min"]["reading"]) == ("b", "r1")
     assert (best["max"]["contact"], best["max"]["reading"]) == ("a", "r2")
     # both: a/r1 2.1, a/r2 1.9, b/r1 3.3, b/r2 2.4

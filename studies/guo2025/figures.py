@@ -1,0 +1,205 @@
+"""The report's PNG figures (matplotlib, Agg backend): profiles over distance from the unit edge
+(mm), normalized amplitudes, the sweeps, the ring contacts and the transient."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .cases import (
+    RING_CONTACTS,
+    TRANSIENT_CONTACT,
+    Plan,
+    contact_name,
+    ranked,
+    sweep_point,
+    uniform_name,
+)
+from .contact import contact_label, study_contact_triples
+from .paper import LDV_BAND_HZ, LETTERS, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
+from .run import Solved
+from .studies import sweep_label
+from .text import design
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _profile_axes(ax, title: str) -> None:
+    ax.set_xlim(0, 20)
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("distance from the unit edge (mm)")
+    ax.set_ylabel("amplitude / centre amplitude")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def fig_single_layers(r: Mapping[str, Solved], path: Path) -> None:
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for i, c in enumerate(LETTERS):
+        s, col = r[f"single/{c}"], f"C{i}"
+        ax.plot(s.profile_mm, s.normalized_profile(), color=col, label=f"{c} magnitude")
+        ax.plot(s.profile_mm, s.normalized_profile(True), "--", color=col, label=f"{c} abs U_z")
+    ax.axhspan(*PAPER_SINGLE_RANGE, color="grey", alpha=0.2, label="paper: edge 50-58 %")
+    _profile_axes(ax, "Single layers, forward, glued (cf. Fig. 9a)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fig_triples(r: Mapping[str, Solved], triples: Sequence[str], path: Path) -> None:
+    plt = _plt()
+    order = ranked(r, triples, False)
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
+    picks = list(dict.fromkeys([order[0], "ACD", order[-1]]))
+    for i, t in enumerate(picks):
+        s, col = r[f"triple/{t}"], f"C{i}"
+        ax.plot(s.profile_mm, s.normalized_profile(), color=col, label=f"{design(t)} magnitude")
+        ax.plot(s.profile_mm, s.normalized_profile(True), "--", color=col,
+                label=f"{design(t)} abs U_z")
+    ax.axhline(PAPER_TRIPLE_MIN, color="k", lw=0.8, ls=":", label="paper 19 % / 90 %")
+    ax.axhline(PAPER_TRIPLE_MAX, color="k", lw=0.8, ls=":")
+    _profile_axes(ax, "Most restraining, A-C-D, most enhancing (cf. Fig. 9b/c)")
+    vals = [r[f"triple/{t}"].norm for t in order]
+    vals_z = [r[f"triple/{t}"].norm_z for t in order]
+    x = np.arange(len(order))
+    bx.bar(x, vals, color=["C3" if t == "ACD" else "C0" for t in order], label="magnitude")
+    bx.plot(x, vals_z, "k.", ms=4, label="abs U_z")
+    bx.axhline(PAPER_TRIPLE_MIN, color="k", lw=0.8, ls=":")
+    bx.axhline(PAPER_TRIPLE_MAX, color="k", lw=0.8, ls=":")
+    bx.set_xticks(x, [t for t in order], rotation=90, fontsize=6 if len(order) > 16 else 8)
+    bx.set_ylabel("normalized edge amplitude")
+    bx.set_title("All triples, ranked (A-C-D in red)", fontsize=10)
+    bx.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fig_sweeps(r: Mapping[str, Solved], sweeps: Mapping[str, Sequence[float]],
+               path: Path) -> None:
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(sweeps), figsize=(4.2 * len(sweeps), 3.8))
+    for ax, (name, values) in zip(np.atleast_1d(axes), sweeps.items(), strict=True):
+        sols = [r[uniform_name(*sweep_point(name, x))] for x in values]
+        label, unit, table = sweep_label(name)
+        ax.plot(values, [s.edge_um for s in sols], "o-", color="C0")
+        ax.set_ylabel("edge amplitude (um)", color="C0")
+        ax.set_xlabel(f"{label} ({unit})")
+        if name == "E":
+            ax.set_xscale("log")
+        tw = ax.twinx()
+        tw.plot(values, [s.norm for s in sols], "s--", color="C1", label="magnitude")
+        tw.plot(values, [s.norm_z for s in sols], "^:", color="C2", label="abs U_z")
+        tw.set_ylabel("normalized edge")
+        tw.legend(fontsize=7)
+        ax.set_title(f"{table}: three equal rings", fontsize=10)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fig_structure(r: Mapping[str, Solved], path: Path) -> None:
+    plt = _plt()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.6))
+    x = np.arange(2)
+    for i, o in enumerate(("forward", "reverse")):
+        ax.bar(x + 0.4 * i, [r[f"bare/{o}/{a}"].centre_um for a in ("glued", "pogo")], 0.4,
+               label=o)
+    ax.set_xticks(x + 0.2, ["glued", "pogo"])
+    ax.set_ylabel("centre amplitude (um)")
+    ax.set_title("Orientation, bare motor (cf. Fig. 8a)", fontsize=10)
+    ax.legend(fontsize=8)
+    for i, a in enumerate(("glued", "pogo")):
+        bx.bar(x + 0.4 * i, [r[f"bare/{o}/{a}"].edge_um for o in ("reverse", "forward")], 0.4,
+               label=a)
+    bx.set_xticks(x + 0.2, ["reverse", "forward"])
+    bx.set_ylabel("edge amplitude (um)")
+    bx.set_title("Pogo pins, bare motor (cf. Fig. 8b)", fontsize=10)
+    bx.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fig_ring_contact(r: Mapping[str, Solved], triples: Sequence[str], default: str,
+                     path: Path) -> None:
+    plt = _plt()
+    names = [*(f"single/{c}" for c in LETTERS),
+             *(f"triple/{t}" for t in study_contact_triples(r, triples))]
+    order = [default, *(c for c in RING_CONTACTS if c != default)]
+    fig, ax = plt.subplots(figsize=(10, 5.0))
+    x = np.arange(len(names))
+    w = 0.8 / len(order)
+    for i, c in enumerate(order):
+        sols = [r[contact_name(n, c)] for n in names]
+        ax.bar(x + (i - (len(order) - 1) / 2) * w, [s.norm for s in sols], w,
+               color=f"C{i}", label=contact_label(c, default) + ", magnitude")
+        ax.plot(x + (i - (len(order) - 1) / 2) * w, [s.norm_z for s in sols], "k.", ms=4,
+                label="abs U_z" if i == 0 else None)
+    ax.axhspan(*PAPER_SINGLE_RANGE, color="grey", alpha=0.25, label="paper: single 50-58 %")
+    ax.axhline(PAPER_TRIPLE_MIN, color="k", lw=0.8, ls=":", label="paper: triples 19 % / 90 %")
+    ax.axhline(PAPER_TRIPLE_MAX, color="k", lw=0.8, ls=":")
+    ax.set_xticks(x, [n.split("/")[-1] if n.startswith("triple") else n.replace("single/", "")
+                      + " (single)" for n in names], rotation=45, fontsize=8)
+    ax.set_ylabel("normalized edge amplitude")
+    ax.set_title("How the inner ring meets the motor (ring contact)", fontsize=10)
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.2))
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fig_transient(r: Mapping[str, Solved], path: Path) -> None:
+    plt = _plt()
+    t = r["transient/ACD"].transient
+    h = r[contact_name("triple/ACD", TRANSIENT_CONTACT)]
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 3.8))
+    ax.semilogy(t["t_ms"], t["centre_um"], lw=0.8, label="centre")
+    ax.semilogy(t["t_ms"], t["edge_um"], lw=0.8, label="edge")
+    ax.set_title("raw |u(t)| on the theta = 0 meridian", fontsize=10)
+    bx.plot(t["t_ms"], t["centre_band_hist_um"], lw=0.8, label="centre, band-passed")
+    bx.plot(t["t_ms"], t["edge_band_hist_um"], lw=0.8, label="edge, band-passed")
+    bx.axhline(h.centre_um, color="C0", ls="--", label="centre, harmonic magnitude")
+    bx.axhline(h.edge_um, color="C1", ls="--", label="edge, harmonic magnitude")
+    bx.set_title(f"|u(t)| band-passed {LDV_BAND_HZ[0]:g}-{LDV_BAND_HZ[1]:g} Hz", fontsize=10)
+    for a in (ax, bx):
+        a.set_xlabel("time (ms)")
+        a.set_ylabel("displacement magnitude (um)")
+        a.legend(fontsize=7)
+        a.grid(alpha=0.3)
+    fig.suptitle(f"A-C-D, reverse, pogo, ring contact '{TRANSIENT_CONTACT}': transient from "
+                 "rest vs steady state", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_figures(r: Mapping[str, Solved], p: Plan, out: Path, default: str) -> list[str]:
+    """Write the PNGs into ``out``; returns their file names."""
+    figs = {"structure.png": lambda f: fig_structure(r, f),
+            "single_layers.png": lambda f: fig_single_layers(r, f),
+            "triples.png": lambda f: fig_triples(r, p.triples, f),
+            "sweeps.png": lambda f: fig_sweeps(r, p.sweeps, f)}
+    if study_contact_triples(r, p.triples):
+        figs["ring_contact.png"] = lambda f: fig_ring_contact(r, p.triples, default, f)
+    if "transient/ACD" in r:
+        figs["transient.png"] = lambda f: fig_transient(r, f)
+    for name, draw in figs.items():
+        draw(out / name)
+    return list(figs)
+
+
+# --------------------------------------------------------------------------- the report
