@@ -89,8 +89,8 @@ def magnitude(U: NDArray) -> Any:
 
 def solve_scene(d: Mapping[str, Any]) -> Solved:
     """Build and solve one scene dict (worker side; plain data in and out)."""
+    from fem import simulate
     from fem.scene import scene_from_dict
-    from fem.simulate import simulate
 
     res = simulate(scene_from_dict(d))
     r_mm, surf = res.surface_curve()

@@ -19,7 +19,11 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
-__all__ = ["THREAD_VARS", "cpu_count", "make_executor", "one_blas_thread", "process_map"]
+__all__ = ["THREAD_VARS", "check_workers", "cpu_count", "make_executor", "one_blas_thread",
+           "process_map"]
+
+#: Largest worker count accepted (far above any machine this runs on; catches typos).
+MAX_WORKERS = 256
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -55,6 +59,16 @@ def cpu_count() -> int:
         return os.cpu_count() or 1
 
 
+def check_workers(workers: int | None) -> int:
+    """The pool size: None = every core; else an int with 1 <= workers <= 256."""
+    if workers is None:
+        return cpu_count()
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
+        raise ValueError(f"workers = {workers!r} is out of range: allowed 1 <= workers <= "
+                         f"{MAX_WORKERS} (None uses every core)")
+    return workers
+
+
 def _init_worker(parent_pid: int) -> None:
     # A worker orphaned by kill -9 of its parent would otherwise wait on its queue forever.
     def watch() -> None:
@@ -80,11 +94,9 @@ def process_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None
     ``fn`` must be importable by name (a module-level function). ``workers`` defaults to every
     core; ``workers=1`` runs in this process. With ``desc`` a tqdm progress bar (rate, ETA)
     goes to stderr. Ctrl-C cancels the queued work and shuts the pool down."""
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 1):
-        raise ValueError(f"workers = {workers!r}: need an integer >= 1")
+    n_workers = check_workers(workers)
     todo = list(items)
-    n = min(workers or cpu_count(), max(len(todo), 1))
+    n = min(n_workers, max(len(todo), 1))
     bar = _progress(len(todo), desc)
     try:
         if n == 1:
@@ -93,16 +105,17 @@ def process_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None
                 out.append(fn(item))
                 bar.update(1)
             return out
+        results: list[Any] = [None] * len(todo)
+        # Workers spawn at the first submit: keep the one-thread environment until then.
         with one_blas_thread():
             executor = make_executor(n)
-        results: list[Any] = [None] * len(todo)
-        try:
-            futures = {executor.submit(fn, item): i for i, item in enumerate(todo)}
-            for fut in cf.as_completed(futures):
-                results[futures[fut]] = fut.result()
-                bar.update(1)
-        finally:
-            executor.shutdown(wait=True, cancel_futures=True)
+            try:
+                futures = {executor.submit(fn, item): i for i, item in enumerate(todo)}
+                for fut in cf.as_completed(futures):
+                    results[futures[fut]] = fut.result()
+                    bar.update(1)
+            finally:
+                executor.shutdown(wait=True, cancel_futures=True)
         return results
     finally:
         bar.close()

@@ -10,10 +10,9 @@ import re
 import numpy as np
 import pytest
 
-from fem import SOLVER_VERSION
+from fem import SOLVER_VERSION, simulate
 from fem.problem import resolve_effects
 from fem.scene import SceneError, Unit, load_scene, scene_from_dict, scene_to_dict
-from fem.simulate import simulate
 from hapticrom.cli import main
 from studies.guo2025 import cases, paper, run
 from studies.guo2025 import contact as ct
