@@ -26,19 +26,22 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 __all__ = ["KERNELS", "GPSurrogateRegressor"]
 
-#: Kernels offered. Only "rbf" exports to ONNX (skl2onnx 1.20 cannot convert a Matern kernel:
-#: its converter crashes, and its "cdist" graph assumes squared-Euclidean distances).
+#: Kernels offered; both export to ONNX (surrogate.export) with a parity test each.
 KERNELS = ("rbf", "matern52")
+#: Length scales on features scaled to [0, 1]: below 0.05 a feature would vary faster than
+#: any affordable sample spacing resolves (a GP then degenerates to white noise); above 1e3
+#: the feature is irrelevant.
+LENGTH_SCALE_BOUNDS = (5e-2, 1e3)
 
 
 def ard_kernel(name: str, d: int, noise: float, noise_bounds: tuple[float, float]) -> Kernel:
     """amplitude * ARD(name) + white noise, for ``d`` features scaled to [0, 1]."""
-    amplitude = ConstantKernel(1.0, (1e-3, 1e3))
+    amplitude = ConstantKernel(1.0, (1e-2, 1e2))
     scales = np.ones(max(d, 1))
     if name == "rbf":
-        core: Kernel = RBF(scales, (1e-2, 1e3))
+        core: Kernel = RBF(scales, LENGTH_SCALE_BOUNDS)
     elif name == "matern52":
-        core = Matern(scales, (1e-2, 1e3), nu=2.5)
+        core = Matern(scales, LENGTH_SCALE_BOUNDS, nu=2.5)
     else:
         raise ValueError(f"kernel = {name!r}: allowed {', '.join(KERNELS)}")
     return amplitude * core + WhiteKernel(noise, noise_bounds)
@@ -56,7 +59,7 @@ class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
     """
 
     def __init__(self, kernel: str = "rbf", noise: float = 1e-2,
-                 noise_bounds: tuple[float, float] = (1e-6, 1.0),
+                 noise_bounds: tuple[float, float] = (1e-5, 1.0),
                  n_restarts_optimizer: int = 0, max_train: int = 1500,
                  random_state: int = 0) -> None:
         self.kernel = kernel
@@ -83,6 +86,11 @@ class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
         self.n_train_ = len(X)
         self.kernel_ = gp.kernel_
         return self
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        return tags
 
     def predict(self, X: Any, return_std: bool = False) -> Any:
         check_is_fitted(self)

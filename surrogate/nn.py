@@ -1,7 +1,7 @@
 """A small multi-output MLP ensemble (torch, CPU) with a scikit-learn interface.
 
 ``MLPEnsembleRegressor`` trains ``n_members`` independent tanh MLPs at once as one batched
-network (weights of shape (members, in, out), so an epoch of the whole ensemble is a few
+network (weights of shape (members, in, out), so a step of the whole ensemble is a few
 batched matrix products). Each member has its own seed, initialisation and random
 train/validation split and stops early on its own validation loss (its best weights are
 kept). The ensemble mean is the prediction, the spread between members the uncertainty (a
@@ -67,17 +67,17 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
     Parameters:
         hidden: hidden layer widths.
         n_members: ensemble size (1 gives a plain MLP with zero std).
-        max_epochs: full-batch Adam epochs at most; patience: epochs without a validation
-            improvement before a member stops.
-        learning_rate, weight_decay: Adam settings (decoupled weight decay, AdamW).
+        max_epochs: epochs at most; patience: epochs without a validation improvement
+            before a member stops (its best weights are kept).
+        learning_rate, weight_decay, batch_size: AdamW settings (decoupled weight decay).
         val_fraction: share of rows each member holds out for early stopping (none when
             fewer than 20 rows).
         random_state: seed of everything random (torch and numpy), so a fit is reproducible.
     """
 
     def __init__(self, hidden: tuple[int, ...] = (64, 64), n_members: int = 5,
-                 max_epochs: int = 3000, patience: int = 200, learning_rate: float = 3e-3,
-                 weight_decay: float = 1e-5, val_fraction: float = 0.15,
+                 max_epochs: int = 1000, patience: int = 50, learning_rate: float = 1e-3,
+                 weight_decay: float = 1e-4, batch_size: int = 64, val_fraction: float = 0.15,
                  random_state: int = 0) -> None:
         self.hidden = hidden
         self.n_members = n_members
@@ -85,6 +85,7 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
         self.patience = patience
         self.learning_rate = learning_rate
         self.weight_decay = weight_decay
+        self.batch_size = batch_size
         self.val_fraction = val_fraction
         self.random_state = random_state
 
@@ -106,7 +107,7 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
         try:
             self.weights_, self.biases_, self.best_epoch_ = _train(
                 Xs, Ys, train, val, tuple(self.hidden), self.max_epochs, self.patience,
-                self.learning_rate, self.weight_decay)
+                self.learning_rate, self.weight_decay, self.batch_size)
         finally:
             torch.set_num_threads(threads)
         self.n_outputs_ = Y.shape[1]
@@ -123,6 +124,11 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
         return EnsembleModule([w.clone() for w in self.weights_],
                               [v.clone() for v in self.biases_], self.x_mean_,
                               self.x_scale_, self.y_mean_, self.y_scale_, B, b).eval()
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        return tags
 
     def predict(self, X: Any, return_std: bool = False) -> Any:
         check_is_fitted(self)
@@ -152,11 +158,23 @@ def _splits(n: int, members: int, val_fraction: float,
     return torch.as_tensor(train), torch.as_tensor(val)
 
 
+def _forward(X: torch.Tensor, weights: list[torch.Tensor],
+             biases: list[torch.Tensor]) -> torch.Tensor:
+    h = X.unsqueeze(0)
+    for i, (w, v) in enumerate(zip(weights, biases, strict=True)):
+        h = torch.matmul(h, w) + v
+        if i < len(weights) - 1:
+            h = torch.tanh(h)
+    return h
+
+
 def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Tensor,
            hidden: tuple[int, ...], max_epochs: int, patience: int, lr: float,
-           weight_decay: float) -> tuple[list[torch.Tensor], list[torch.Tensor], list[int]]:
-    """Full-batch AdamW on all members at once; per-member early stopping."""
-    members = train.shape[0]
+           weight_decay: float, batch_size: int
+           ) -> tuple[list[torch.Tensor], list[torch.Tensor], list[int]]:
+    """Mini-batch AdamW on all members at once (each member sees only its own training rows
+    of a batch); per-member early stopping on the validation loss after each epoch."""
+    members, n = train.shape
     sizes = (X.shape[1], *hidden, Y.shape[1])
     weights, biases = [], []
     for fan_in, fan_out in itertools.pairwise(sizes):
@@ -166,20 +184,21 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
         biases.append(torch.zeros(members, 1, fan_out, requires_grad=True))
     params = weights + biases
     opt = torch.optim.AdamW(params, lr=lr, weight_decay=weight_decay)
-    wtr = train.float().unsqueeze(-1) / train.sum(dim=1).clamp(min=1).view(-1, 1, 1)
+    tmask = train.float().unsqueeze(-1)
     wva = val.float().unsqueeze(-1) / val.sum(dim=1).clamp(min=1).view(-1, 1, 1)
     best = torch.full((members,), float("inf"))
     best_epoch = torch.zeros(members, dtype=torch.long)
     kept = [p.detach().clone() for p in params]
     for epoch in range(max_epochs):
-        h = X.unsqueeze(0)
-        for i, (w, v) in enumerate(zip(weights, biases, strict=True)):
-            h = torch.matmul(h, w) + v
-            if i < len(weights) - 1:
-                h = torch.tanh(h)
-        sq = (h - Y.unsqueeze(0)) ** 2
-        loss = (sq * wtr).sum()
-        with torch.no_grad():  # score and snapshot the weights before this step moves them
+        for rows in torch.randperm(n).split(max(batch_size, 1)):
+            m = tmask[:, rows]
+            sq = (_forward(X[rows], weights, biases) - Y[rows].unsqueeze(0)) ** 2
+            loss = ((sq * m).sum(dim=(1, 2)) / m.sum(dim=(1, 2)).clamp(min=1)).sum()
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        with torch.no_grad():
+            sq = (_forward(X, weights, biases) - Y.unsqueeze(0)) ** 2
             val_loss = (sq * wva).sum(dim=(1, 2)) / Y.shape[1]
             better = val_loss < best
             best = torch.where(better, val_loss, best)
@@ -188,8 +207,5 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
                 k[better] = p.detach()[better]
             if int((epoch - best_epoch).min()) > patience:
                 break
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
     return ([k.clone() for k in kept[:len(weights)]], [k.clone() for k in kept[len(weights):]],
             best_epoch.tolist())

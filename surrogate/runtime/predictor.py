@@ -65,9 +65,10 @@ class EdgeRadius:
         found = match.any(axis=1)
         if not found.all():
             i = int(np.argmin(found))
+            combo = dict(zip(self.inputs, sub[i].tolist(), strict=True))
             raise PredictorInputError(self.inputs[0] if self.inputs else "X",
-                                      f"row {i}: the combination {dict(zip(self.inputs, sub[i], strict=False))}"
-                                      " of structural inputs was never trained")
+                                      f"row {i}: the combination {combo} of structural inputs "
+                                      "was never trained")
         return self.values[np.argmax(match, axis=1)]
 
 
