@@ -30,9 +30,8 @@ from surrogate.runtime.predictor import Predictor, make_session
 __all__ = ["KINDS", "TrainingData", "edge_radius_rule", "evaluate", "load_datasets", "train"]
 
 KINDS = ("gp", "nn")
-#: POD modes a GP learns by default: its targets share one kernel, and the high modes
-#: (the last 0.5 % of the profile variance) are mostly noise that drags the shared length
-#: scales down.
+#: POD modes a GP learns by default (one GP each; the ONNX graph holds an N x N matrix per
+#: target, so each mode costs N^2 doubles of model size).
 GP_POD_MODES = 4
 #: Largest |d ln| between the exported graph and the estimator: float32 NN, float64 GP.
 PARITY_TOL = {"nn": 1e-4, "gp": 1e-6}
@@ -230,7 +229,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     card["metrics"] = evaluate(predictor.predict(data.codes[te]), data.center_um[te],
                                data.profile_um[te])
     if kind == "gp":
-        card["training"]["gp_kernel"] = str(est.kernel_)
+        card["training"]["gp_kernels"] = est.kernels()
         card["training"]["gp_rows_used"] = int(est.n_train_)
     write_model(out, card, {"model.onnx": onnx_bytes}, overwrite=overwrite)
     return card

@@ -76,8 +76,8 @@ def test_gp_onnx_parity_mean_and_std(kernel):
     sess = ort.InferenceSession(export_gp(gp, B, b, {}), providers=["CPUExecutionProvider"])
     mean, std = sess.run(["log_mean", "log_std"], {"x": Xt})
     ref_mean, ref_std = gp.predict(Xt, return_std=True)
-    np.testing.assert_allclose(mean, ref_mean @ B + b, rtol=0, atol=1e-8)
-    np.testing.assert_allclose(std, np.sqrt(ref_std**2 @ B**2), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(mean, ref_mean @ B + b, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(std, np.sqrt(ref_std**2 @ B**2), rtol=1e-5, atol=1e-8)
     # far from the data the std tends to the prior: the kernel really is in the graph
     far = sess.run(["log_std"], {"x": Xt + 50.0})[0]
     assert np.all(far > 5 * std.max())

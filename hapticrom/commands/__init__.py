@@ -1,0 +1,1 @@
+"""Subcommand modules of the ``hapticrom`` CLI: each has ``register(subparsers)``."""
