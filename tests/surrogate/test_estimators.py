@@ -77,7 +77,10 @@ def test_gp_onnx_parity_mean_and_std(kernel):
     mean, std = sess.run(["log_mean", "log_std"], {"x": Xt})
     ref_mean, ref_std = gp.predict(Xt, return_std=True)
     np.testing.assert_allclose(mean, ref_mean @ B + b, rtol=0, atol=1e-6)
-    np.testing.assert_allclose(std, np.sqrt(ref_std**2 @ B**2), rtol=1e-5, atol=1e-8)
+    # the std is a difference of nearly equal numbers near the data (noise at its floor here):
+    # agreement to 1e-4 in log amplitude (0.01 %), far below anything physical; the traps this
+    # guards against (a wrong kernel or distance) are off by O(0.1-1)
+    np.testing.assert_allclose(std, np.sqrt(ref_std**2 @ B**2), rtol=0, atol=1e-4)
     # far from the data the std tends to the prior: the kernel really is in the graph
     far = sess.run(["log_std"], {"x": Xt + 50.0})[0]
     assert np.all(far > 5 * std.max())
