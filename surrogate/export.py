@@ -161,6 +161,8 @@ def export_gp(estimator: Any, B: np.ndarray, b: np.ndarray,
         nodes += more
         consts.update(c)
     T = len(parts)
+    used = {name for node in nodes for name in node.input} | {"out_B", "out_B2", "out_b"}
+    consts = {n: v for n, v in consts.items() if n in used}
     nodes += [helper.make_node("Concat", [f"m{t}" for t in range(T)], ["gp_mean"], axis=1),
               helper.make_node("Concat", [f"vy{t}" for t in range(T)], ["gp_var"], axis=1),
               helper.make_node("MatMul", ["gp_mean", "out_B"], ["lm0"]),
