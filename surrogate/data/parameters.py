@@ -28,9 +28,11 @@ MAPS = ("value", "list_length")
 RESERVED_COLUMNS = frozenset({
     "sample_id", "sample_index", "status", "error", "source", "wall_s", "dofs", "elements",
     "solver_version", "solver_hash", "scene_json", "warnings", "center_amplitude_um",
-    "edge_amplitude_um", "normalized_edge", "profile_distance_mm", "profile_uz_um",
+    "edge_amplitude_um", "normalized_edge", "edge_radius_mm", "profile_distance_mm",
+    "profile_uz_um",
     "profile_magnitude_um",
     "history_t_s", "history_r_mm", "history_uz_um", "history_magnitude_um",
+    "history_center_um", "history_edge_um",
 })
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 

@@ -23,7 +23,10 @@ under-resolved mesh; "; "-joined, null if none). Then one column per space param
 outputs: center/edge amplitudes [um], normalized edge amplitude [-], the surface profile
 (list columns ``profile_distance_mm``, ``profile_uz_um``, ``profile_magnitude_um``) and, for
 transient scenes, time histories (``history_t_s``, ``history_r_mm`` and per-point lists
-``history_uz_um``, ``history_magnitude_um``). The key of a row is (source, sample_id).
+``history_uz_um``, ``history_magnitude_um``; for a unit also ``history_center_um`` and
+``history_edge_um``, each [u_r, u_z, u_theta]). ``edge_radius_mm`` is the unit's outer radius
+(the solver's definition; null for datasets written before it was stored). The key of a row is
+(source, sample_id).
 """
 
 from __future__ import annotations
@@ -87,6 +90,7 @@ OUTPUT_FIELDS = [
     pa.field("center_amplitude_um", pa.float64()),
     pa.field("edge_amplitude_um", pa.float64()),
     pa.field("normalized_edge", pa.float64()),
+    pa.field("edge_radius_mm", pa.float64()),
     pa.field("profile_distance_mm", _F64_LIST),
     pa.field("profile_uz_um", _F64_LIST),
     pa.field("profile_magnitude_um", _F64_LIST),
@@ -94,6 +98,9 @@ OUTPUT_FIELDS = [
     pa.field("history_r_mm", _F64_LIST),
     pa.field("history_uz_um", pa.list_(_F64_LIST)),
     pa.field("history_magnitude_um", pa.list_(_F64_LIST)),
+    # transient unit runs: [u_r, u_z, u_theta] histories (um) at the center and edge points
+    pa.field("history_center_um", pa.list_(_F64_LIST)),
+    pa.field("history_edge_um", pa.list_(_F64_LIST)),
 ]
 STATUSES = ("ok", "failed")
 

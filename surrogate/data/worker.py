@@ -20,7 +20,8 @@ import numpy as np
 
 from surrogate.data.provenance import solver_info
 
-__all__ = ["outputs_from_result", "run_chunk", "run_sample", "worker_solver_hash"]
+__all__ = ["edge_radius_mm", "outputs_from_result", "run_chunk", "run_sample",
+           "worker_solver_hash"]
 
 
 def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
@@ -67,6 +68,7 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
         "center_amplitude_um": res.center_amplitude_um,
         "edge_amplitude_um": res.edge_amplitude_um,
         "normalized_edge": res.normalized_edge,
+        "edge_radius_mm": res.edge_mm,
         "profile_distance_mm": res.profile_mm.tolist(),
         "profile_uz_um": (np.abs(res.profile[:, 1]) * 1e6).tolist(),
         "profile_magnitude_um": (magnitude(res.profile) * 1e6).tolist(),
@@ -81,7 +83,19 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
         out["history_r_mm"] = (probes * 1e3).tolist()
         out["history_uz_um"] = (h.u[:, : probes.size, 1].T * 1e6).tolist()
         out["history_magnitude_um"] = (magnitude(h.u[:, : probes.size]).T * 1e6).tolist()
+        if res.edge_mm is not None:  # a unit: histories hold the probes, the center, the edge
+            for i, name in enumerate(("center", "edge")):
+                out[f"history_{name}_um"] = (h.u[:, probes.size + i, :].T * 1e6).tolist()
     return out
+
+
+def edge_radius_mm(scene_json: str) -> float | None:
+    """The unit's outer radius [mm] of a stored row's scene (the solver's one definition), for
+    rows written before datasets stored ``edge_radius_mm``; None for a scene without a unit."""
+    from fem.scene import scene_from_dict
+
+    unit = scene_from_dict(json.loads(scene_json)).unit
+    return None if unit is None else float(unit.outer_radius_mm)
 
 
 def _non_finite(out: Mapping[str, Any]) -> str:

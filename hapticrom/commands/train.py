@@ -1,0 +1,49 @@
+"""``hapticrom train``: fit a surrogate on datasets and register it under ``models/NAME``.
+
+    hapticrom train --data datasets/default --kind nn --out models/default-nn
+    hapticrom train --data datasets/default datasets/lab --kind gp --out models/gp --overwrite
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+__all__ = ["register"]
+
+
+def _run(args: argparse.Namespace) -> int:
+    from surrogate.train import train
+
+    options = json.loads(args.options) if args.options else {}
+    if not isinstance(options, dict):
+        raise ValueError(f"--options {args.options!r}: expected a JSON object")
+    card = train(args.data, args.kind, args.out, test_fraction=args.test_fraction,
+                 seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
+                 options=options)
+    t = card["training"]
+    print(f"trained {args.kind} on {t['rows']} rows, held out {t['held_out']} "
+          f"(POD {t['pod_modes']} modes, {100 * t['pod_energy']:.3f} % energy)")
+    for name, m in card["metrics"].items():
+        print(f"  {name:22s} " + "  ".join(f"{k} {v:.4g}" for k, v in m.items()))
+    print(f"export parity max |d ln| {card['export_parity_max_abs_dln']:.2g}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``train`` subcommand."""
+    p = subparsers.add_parser("train", help="train a surrogate (gp or nn) on datasets")
+    p.add_argument("--data", nargs="+", required=True, metavar="DATASET",
+                   help="one or more dataset directories (same space inputs)")
+    p.add_argument("--kind", required=True, choices=("gp", "nn"), help="model kind")
+    p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing model")
+    p.add_argument("--test-fraction", type=float, default=0.2,
+                   help="share of rows held out for the metrics (default 0.2)")
+    p.add_argument("--seed", type=int, default=0, help="seed of split and training")
+    p.add_argument("--modes", type=int, default=None,
+                   help="POD modes of the log profile (default: 99.99 %% energy; gp 4)")
+    p.add_argument("--options", metavar="JSON",
+                   help='estimator parameters, e.g. \'{"n_members": 8}\'')
+    p.set_defaults(func=_run)

@@ -1,0 +1,112 @@
+"""Gaussian-process regression on encoded design features (scikit-learn).
+
+``GPSurrogateRegressor`` wraps :class:`sklearn.gaussian_process.GaussianProcessRegressor`
+with the kernel this project uses: an amplitude times an ARD kernel (one length scale per
+feature; features are already scaled to [0, 1] from the space's ranges, log parameters on a
+log scale) plus white noise (the FE data is not a smooth function at the resolution it is
+sampled: the fitted noise level is part of the honest predictive std). Targets are normalised
+(``normalize_y``); each target gets its own GP (own length scales and noise: a shared
+kernel over targets as different as a center amplitude and a high POD coefficient collapses
+to the shortest length scales and a large noise, measured on the shipped data).
+
+GP fitting is O(n^3) in time and O(n^2) in memory: above ``max_train`` rows a random subset
+(seeded) is used, and the subset size is recorded as ``n_train_``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, Matern, WhiteKernel
+from sklearn.utils.validation import check_is_fitted, validate_data
+
+__all__ = ["KERNELS", "GPSurrogateRegressor"]
+
+#: Kernels offered; both export to ONNX (surrogate.export) with a parity test each.
+KERNELS = ("rbf", "matern52")
+#: Length scales on features scaled to [0, 1]: below 0.05 a feature would vary faster than
+#: any affordable sample spacing resolves (a GP then degenerates to white noise); above 1e3
+#: the feature is irrelevant.
+LENGTH_SCALE_BOUNDS = (5e-2, 1e3)
+
+
+def ard_kernel(name: str, d: int, noise: float, noise_bounds: tuple[float, float]) -> Kernel:
+    """amplitude * ARD(name) + white noise, for ``d`` features scaled to [0, 1]."""
+    amplitude = ConstantKernel(1.0, (1e-2, 1e2))
+    scales = np.ones(max(d, 1))
+    if name == "rbf":
+        core: Kernel = RBF(scales, LENGTH_SCALE_BOUNDS)
+    elif name == "matern52":
+        core = Matern(scales, LENGTH_SCALE_BOUNDS, nu=2.5)
+    else:
+        raise ValueError(f"kernel = {name!r}: allowed {', '.join(KERNELS)}")
+    return amplitude * core + WhiteKernel(noise, noise_bounds)
+
+
+class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
+    """ARD Gaussian processes with predictive std (one per target).
+
+    Parameters:
+        kernel: "rbf" or "matern52" (see ``KERNELS``).
+        noise: initial white-noise variance (of normalised targets); noise_bounds its bounds.
+        n_restarts_optimizer: extra random starts of the hyperparameter search.
+        max_train: rows used at most (a seeded random subset above it).
+        random_state: seed of the subset and the restarts.
+    """
+
+    def __init__(self, kernel: str = "rbf", noise: float = 1e-2,
+                 noise_bounds: tuple[float, float] = (1e-5, 1.0),
+                 n_restarts_optimizer: int = 0, max_train: int = 1000,
+                 random_state: int = 0) -> None:
+        self.kernel = kernel
+        self.noise = noise
+        self.noise_bounds = noise_bounds
+        self.n_restarts_optimizer = n_restarts_optimizer
+        self.max_train = max_train
+        self.random_state = random_state
+
+    def fit(self, X: Any, y: Any) -> GPSurrogateRegressor:
+        X, y = validate_data(self, X, y, dtype=float, multi_output=True, y_numeric=True)
+        rng = np.random.default_rng(self.random_state)
+        if len(X) > self.max_train:
+            keep = np.sort(rng.choice(len(X), self.max_train, replace=False))
+            X, y = X[keep], y[keep]
+        Y = y.reshape(len(y), -1)
+        self.gps_ = []
+        for t in range(Y.shape[1]):
+            gp = GaussianProcessRegressor(
+                ard_kernel(self.kernel, X.shape[1], self.noise, self.noise_bounds),
+                normalize_y=True, n_restarts_optimizer=self.n_restarts_optimizer,
+                random_state=int(rng.integers(2**31)))
+            with warnings.catch_warnings():  # a length scale at its bound means "irrelevant"
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                gp.fit(X, Y[:, t])
+            self.gps_.append(gp)
+        self._y_1d = y.ndim == 1
+        self.n_train_ = len(X)
+        return self
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        return tags
+
+    def predict(self, X: Any, return_std: bool = False) -> Any:
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=float, reset=False)
+        parts = [gp.predict(X, return_std=True) for gp in self.gps_]
+        mean = np.column_stack([m for m, _ in parts])
+        std = np.column_stack([s for _, s in parts])
+        if self._y_1d:
+            mean, std = mean[:, 0], std[:, 0]
+        return (mean, std) if return_std else mean
+
+    def kernels(self) -> list[str]:
+        """The fitted kernel of every target, as text."""
+        check_is_fitted(self)
+        return [str(gp.kernel_) for gp in self.gps_]

@@ -1,0 +1,121 @@
+"""The run-time predictor: a model directory in, named amplitudes out (numpy + onnxruntime).
+
+    >>> p = load_predictor("models/default-nn")
+    >>> out = p.predict({"orientation": ["forward"], "attachment": ["glued"], ...})
+    >>> out["center_amplitude_um"], out["profile_um"], out["edge_radius_mm"]
+
+Outputs per row: ``center_amplitude_um``, ``edge_amplitude_um``, ``normalized_edge``,
+``profile_um`` (n, m) on ``profile_distance_mm`` (distance from the unit's outer edge [mm]),
+``edge_radius_mm`` (the unit's outer radius [mm]) and ``<output>_log_std`` (predictive std of
+the natural log of each amplitude output). Inputs are validated (:class:`PredictorInputError`
+names the input); out-of-range points raise unless ``extrapolate=True``, which adds a boolean
+``extrapolated`` array instead.
+
+This module must stay importable without torch, scikit-learn, pysindy or the FE solver.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import onnxruntime as ort
+
+from surrogate.runtime.card import ModelFileError, read_card
+from surrogate.runtime.encoding import InputSpec, PredictorInputError, encode, parse_inputs
+
+__all__ = ["ModelFileError", "Predictor", "PredictorInputError", "load_predictor",
+           "make_session"]
+
+SCALAR_OUTPUTS = ("center_amplitude_um", "edge_amplitude_um", "normalized_edge")
+_DTYPES = {"float32": np.float32, "float64": np.float64}
+
+
+def make_session(model: bytes | str | Path, threads: int = 1) -> ort.InferenceSession:
+    """An onnxruntime CPU session tuned for small calls from one thread: ``threads`` intra-op
+    threads, no inter-op pool, no busy-wait spinning between calls."""
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = threads
+    opts.inter_op_num_threads = 1
+    opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+    opts.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+    opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    src = model if isinstance(model, bytes) else str(model)
+    return ort.InferenceSession(src, sess_options=opts, providers=["CPUExecutionProvider"])
+
+
+class EdgeRadius:
+    """The unit's outer radius [mm], an exact function of the discrete design inputs stored
+    in the card as a table (every combination seen in training -> its radius)."""
+
+    def __init__(self, rule: dict[str, Any], specs: list[InputSpec]) -> None:
+        names = [s.name for s in specs]
+        if rule.get("method") != "table":
+            raise ModelFileError("edge_radius", f"edge_radius method {rule.get('method')!r} "
+                                 "unknown (expected 'table')")
+        self.columns = [names.index(n) for n in rule["inputs"]]
+        self.inputs = list(rule["inputs"])
+        self.keys = np.asarray(rule["keys"], dtype=float).reshape(-1, len(self.columns))
+        self.values = np.asarray(rule["values_mm"], dtype=float)
+
+    def __call__(self, codes: np.ndarray) -> np.ndarray:
+        sub = codes[:, self.columns]
+        match = np.all(sub[:, None, :] == self.keys[None, :, :], axis=2)
+        found = match.any(axis=1)
+        if not found.all():
+            i = int(np.argmin(found))
+            combo = dict(zip(self.inputs, sub[i].tolist(), strict=True))
+            raise PredictorInputError(self.inputs[0] if self.inputs else "X",
+                                      f"row {i}: the combination {combo} of structural inputs "
+                                      "was never trained")
+        return self.values[np.argmax(match, axis=1)]
+
+
+class Predictor:
+    """A loaded model: validated inputs in, named outputs out. Build with
+    :func:`load_predictor`. The ONNX session is made once, with one thread."""
+
+    def __init__(self, card: dict[str, Any], session: ort.InferenceSession) -> None:
+        self.card = card
+        self.specs = [InputSpec.from_dict(d) for d in card["inputs"]]
+        self.input_names: tuple[str, ...] = tuple(s.name for s in self.specs)
+        self.input_ranges: dict[str, tuple[float, float]] = {s.name: s.range
+                                                             for s in self.specs}
+        self.profile_distance_mm = np.asarray(card["profile_distance_mm"], dtype=float)
+        self.output_names: tuple[str, ...] = (*SCALAR_OUTPUTS, "profile_um", "edge_radius_mm")
+        self.kind = str(card.get("kind", ""))
+        self.session = session
+        self._dtype = _DTYPES[card["graph"]["dtype"]]
+        self._edge = EdgeRadius(card["edge_radius"], self.specs)
+
+    def features(self, X: Any, *, extrapolate: bool = False) -> tuple[np.ndarray, np.ndarray,
+                                                                       np.ndarray]:
+        """(codes, encoded features in the graph's dtype, extrapolated mask)."""
+        codes, outside = parse_inputs(X, self.specs, extrapolate=extrapolate)
+        return codes, encode(codes, self.specs).astype(self._dtype), outside
+
+    def predict(self, X: Any, *, extrapolate: bool = False) -> dict[str, np.ndarray]:
+        """Predict every output for design points ``X`` (see the module docstring)."""
+        codes, feats, outside = self.features(X, extrapolate=extrapolate)
+        log_mean, log_std = self.session.run(["log_mean", "log_std"], {"x": feats})
+        log_mean, log_std = log_mean.astype(float), log_std.astype(float)
+        out: dict[str, np.ndarray] = {}
+        for j, name in enumerate(SCALAR_OUTPUTS):
+            out[name] = np.exp(log_mean[:, j])
+            out[f"{name}_log_std"] = log_std[:, j]
+        out["profile_um"] = np.exp(log_mean[:, 3:])
+        out["profile_um_log_std"] = log_std[:, 3:]
+        out["edge_radius_mm"] = self._edge(codes)
+        if extrapolate:
+            out["extrapolated"] = outside
+        return out
+
+
+def load_predictor(path: str | Path) -> Predictor:
+    """Load ``models/NAME/`` (verifying the sha256 of every file) as a :class:`Predictor`."""
+    card = read_card(path)
+    graph = card.get("graph", {})
+    if graph.get("dtype") not in _DTYPES or "file" not in graph:
+        raise ModelFileError("graph", f"{path}: card has no usable 'graph' entry")
+    return Predictor(card, make_session(Path(path) / graph["file"]))

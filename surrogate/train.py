@@ -1,0 +1,260 @@
+"""Train a surrogate from one or more datasets, measure it on held-out rows, register it.
+
+    card = train(["datasets/default"], kind="nn", out="models/default-nn")
+
+Inputs are the free parameters of the datasets' space (:mod:`surrogate.features`), targets
+the log center amplitude and the POD coefficients of the log profile
+(:mod:`surrogate.pod`). A seeded random ``test_fraction`` of the rows is held out; the
+metrics in the card are computed on those rows *through the exported ONNX graph and the
+run-time encoder*, i.e. for exactly what ships. The exported graph is also checked against
+the in-memory estimator (``export_parity`` in the card; training fails above tolerance).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate.features import codes_from_frame, input_specs
+from surrogate.pod import ProfileTargets, output_columns
+from surrogate.registry import manifest_sha256, package_versions, write_model
+from surrogate.runtime.encoding import InputSpec, encode
+from surrogate.runtime.predictor import Predictor, make_session
+
+__all__ = ["KINDS", "TrainingData", "edge_radius_rule", "evaluate", "load_datasets", "train"]
+
+KINDS = ("gp", "nn")
+#: POD modes a GP learns by default (one GP each; the ONNX graph holds an N x N matrix per
+#: target, so each mode costs N^2 doubles of model size).
+GP_POD_MODES = 4
+#: Largest |d ln| between the exported graph and the estimator: float32 NN, float64 GP (the
+#: GP std, a difference of nearly equal numbers near the data, agrees to about 1e-5).
+PARITY_TOL = {"nn": 1e-4, "gp": 1e-4}
+PREDICTS = ("Harmonic steady-state vibration amplitude of a haptic unit on the skin surface: "
+            "at the center, at the unit's edge, their ratio, and the amplitude-distance "
+            "profile outside the edge")
+
+
+@dataclass
+class TrainingData:
+    """Rows of one or more datasets, ready to fit. Amplitudes in um, distances in mm."""
+
+    specs: list[InputSpec]
+    codes: np.ndarray
+    center_um: np.ndarray
+    profile_um: np.ndarray
+    grid_mm: np.ndarray
+    edge_radius_mm: np.ndarray
+    sources: list[dict[str, Any]]
+
+
+def _edge_radius(df: Any) -> np.ndarray:
+    """The unit's outer radius [mm] of every row: the dataset's column when it has one, else
+    derived from the row's resolved scene by the solver's scene model."""
+    from surrogate.data.worker import edge_radius_mm
+
+    stored = (df["edge_radius_mm"].to_numpy(dtype=float) if "edge_radius_mm" in df.columns
+              else np.full(len(df), np.nan))
+    missing = np.isnan(stored)
+    stored[missing] = [edge_radius_mm(s) for s in df.loc[missing, "scene_json"]]
+    return stored
+
+
+def _merge_specs(a: list[InputSpec], b: list[InputSpec], where: str) -> list[InputSpec]:
+    if [(s.name, s.type, s.choices, s.scale) for s in a] != \
+            [(s.name, s.type, s.choices, s.scale) for s in b]:
+        raise ValueError(f"{where}: its space's inputs differ from the first dataset's "
+                         f"({[s.name for s in b]} vs {[s.name for s in a]})")
+    return [s if s.type == "categorical" else
+            InputSpec(name=s.name, type=s.type, low=min(s.low, t.low), high=max(s.high, t.high),
+                      scale=s.scale, unit=s.unit, description=s.description)
+            for s, t in zip(a, b, strict=True)]
+
+
+def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -> TrainingData:
+    """Read the "ok" rows of every dataset (all of the same space inputs and profile grid;
+    numeric ranges are united)."""
+    from surrogate.data.store import Store
+
+    if not paths:
+        raise ValueError("--data: give at least one dataset")
+    specs: list[InputSpec] | None = None
+    grid: np.ndarray | None = None
+    parts, sources = [], []
+    for path in paths:
+        store = Store.open(path)
+        manifest = store.manifest
+        these = input_specs(manifest["space"]["parameter"], categorical=categorical)
+        specs = these if specs is None else _merge_specs(specs, these, str(path))
+        g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)
+        if grid is None:
+            grid = g
+        elif g.shape != grid.shape or not np.allclose(g, grid):
+            raise ValueError(f"{path}: profile grid differs from the first dataset's")
+        df = store.read()
+        df = df[df["status"] == "ok"].reset_index(drop=True)
+        if len(df) == 0:
+            raise ValueError(f"{path}: no rows with status 'ok'")
+        parts.append(df)
+        sources.append({"path": str(path), "manifest_sha256": manifest_sha256(path),
+                        "space_hash": manifest.get("space_hash"), "rows": len(df)})
+    assert specs is not None and grid is not None
+    if grid.size < 2:
+        raise ValueError("the datasets have no profile grid (profile_grid_mm)")
+    from surrogate.data.store import profile_matrix
+
+    codes = np.concatenate([codes_from_frame(df, specs) for df in parts])
+    center = np.concatenate([df["center_amplitude_um"].to_numpy(float) for df in parts])
+    profile = np.concatenate([profile_matrix(df, grid) for df in parts])
+    radius = np.concatenate([_edge_radius(df) for df in parts])
+    if np.isnan(profile).any():
+        raise ValueError("some rows' profiles do not cover the profile grid")
+    return TrainingData(specs, codes, center, profile, grid, radius, sources)
+
+
+def edge_radius_rule(codes: np.ndarray, specs: Sequence[InputSpec],
+                     radius_mm: np.ndarray) -> dict[str, Any]:
+    """The smallest set of discrete inputs whose value combination determines the edge radius
+    exactly, as a lookup table (``method: table``). ValueError when none does (the radius
+    then depends on a continuous input, which a table cannot hold)."""
+    discrete = [j for j, s in enumerate(specs) if s.type != "continuous"]
+    for size in range(len(discrete) + 1):
+        for cols in itertools.combinations(discrete, size):
+            table: dict[tuple[float, ...], float] = {}
+            exact = True
+            for key, r in zip(map(tuple, codes[:, list(cols)]), radius_mm, strict=True):
+                if abs(table.setdefault(key, r) - r) > 1e-9:
+                    exact = False
+                    break
+            if exact:
+                keys = sorted(table)
+                return {"method": "table", "inputs": [specs[j].name for j in cols],
+                        "keys": [list(k) for k in keys], "values_mm": [table[k] for k in keys]}
+    raise ValueError("edge radius is not a function of the discrete inputs alone")
+
+
+def split(n: int, test_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Seeded (train, test) row indices."""
+    if not 0 < test_fraction < 1:
+        raise ValueError(f"test_fraction = {test_fraction}: must be in (0, 1)")
+    perm = np.random.default_rng(seed).permutation(n)
+    n_test = max(1, round(test_fraction * n))
+    return np.sort(perm[n_test:]), np.sort(perm[:n_test])
+
+
+def evaluate(pred: dict[str, np.ndarray], center_um: np.ndarray,
+             profile_um: np.ndarray) -> dict[str, Any]:
+    """Held-out metrics: relative errors (median, 95th percentile) of the scalar outputs,
+    profile relative L2 error, and coverage of the 95 % interval exp(mu +- 1.96 sigma)."""
+    truth = {"center_amplitude_um": center_um, "edge_amplitude_um": profile_um[:, 0],
+             "normalized_edge": profile_um[:, 0] / center_um}
+    out: dict[str, Any] = {}
+    for name, y in truth.items():
+        rel = np.abs(pred[name] / y - 1.0)
+        z = np.abs(np.log(y) - np.log(pred[name])) / np.maximum(pred[f"{name}_log_std"], 1e-300)
+        out[name] = {"median_rel_err": float(np.median(rel)),
+                     "p95_rel_err": float(np.percentile(rel, 95)),
+                     "coverage95": float(np.mean(z <= 1.959964))}
+    l2 = np.linalg.norm(pred["profile_um"] - profile_um, axis=1) / np.linalg.norm(profile_um,
+                                                                                 axis=1)
+    out["profile_um"] = {"median_rel_l2": float(np.median(l2)),
+                         "p95_rel_l2": float(np.percentile(l2, 95))}
+    return out
+
+
+def _fit(kind: str, X: np.ndarray, T: np.ndarray, seed: int, options: dict[str, Any]) -> Any:
+    if kind == "nn":
+        from surrogate.nn import MLPEnsembleRegressor
+
+        return MLPEnsembleRegressor(random_state=seed, **options).fit(X, T)
+    if kind == "gp":
+        from surrogate.gp import GPSurrogateRegressor
+
+        return GPSurrogateRegressor(random_state=seed, **options).fit(X, T)
+    raise ValueError(f"--kind {kind!r}: allowed {', '.join(KINDS)}")
+
+
+def _export(kind: str, est: Any, B: np.ndarray, b: np.ndarray, meta: dict[str, Any]) -> bytes:
+    from surrogate.export import export_gp, export_nn
+
+    return (export_nn if kind == "nn" else export_gp)(est, B, b, meta)
+
+
+def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
+          test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
+          overwrite: bool = False, categorical: str = "onehot",
+          options: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Train a ``kind`` ("gp" or "nn") model on ``paths``, write ``out``; return its card."""
+    if kind not in KINDS:
+        raise ValueError(f"--kind {kind!r}: allowed {', '.join(KINDS)}")
+    if Path(out).exists() and not overwrite:
+        raise FileExistsError(f"{out} exists (pass --overwrite to replace it)")
+    data = load_datasets(paths, categorical=categorical)
+    tr, te = split(len(data.codes), test_fraction, seed)
+    X = encode(data.codes, data.specs)
+    if n_modes is None and kind == "gp":
+        n_modes = min(GP_POD_MODES, data.grid_mm.size)
+    targets = ProfileTargets(n_modes=n_modes)
+    T = targets.fit_transform(data.center_um[tr], data.profile_um[tr])
+    B, b = targets.output_map()
+    est = _fit(kind, X[tr], T, seed, dict(options or {}))
+    card: dict[str, Any] = {
+        "kind": kind, "predicts": PREDICTS,
+        "inputs": [s.to_dict() for s in data.specs],
+        "outputs": [{"name": "center_amplitude_um", "unit": "um"},
+                    {"name": "edge_amplitude_um", "unit": "um"},
+                    {"name": "normalized_edge", "unit": ""},
+                    {"name": "profile_um", "unit": "um", "grid": "profile_distance_mm"},
+                    {"name": "edge_radius_mm", "unit": "mm"}],
+        "log_output_columns": output_columns(data.grid_mm.size),
+        "profile_distance_mm": data.grid_mm.tolist(),
+        "edge_radius": edge_radius_rule(data.codes, data.specs, data.edge_radius_mm),
+        "graph": {"file": "model.onnx", "dtype": "float32" if kind == "nn" else "float64",
+                  "input": "x", "outputs": ["log_mean", "log_std"]},
+        "training_data": data.sources,
+        "training": {"rows": int(tr.size), "held_out": int(te.size), "seed": seed,
+                     "test_fraction": test_fraction, "pod_modes": int(targets.pod.modes_.shape[0]),
+                     "pod_energy": float(targets.pod.energy_[-1]),
+                     "estimator": {k: _plain(v) for k, v in est.get_params().items()}},
+        "versions": package_versions()}
+    meta = {k: card[k] for k in ("kind", "inputs", "outputs", "profile_distance_mm",
+                                 "training_data")}
+    onnx_bytes = _export(kind, est, B, b, meta)
+    predictor = Predictor({**card, "files": {}}, make_session(onnx_bytes))
+    card["export_parity_max_abs_dln"] = _parity(kind, est, predictor, X[te], B, b)
+    card["metrics"] = evaluate(predictor.predict(data.codes[te]), data.center_um[te],
+                               data.profile_um[te])
+    if kind == "gp":
+        card["training"]["gp_kernels"] = est.kernels()
+        card["training"]["gp_rows_used"] = int(est.n_train_)
+    write_model(out, card, {"model.onnx": onnx_bytes}, overwrite=overwrite)
+    return card
+
+
+def _parity(kind: str, est: Any, predictor: Predictor, X: np.ndarray, B: np.ndarray,
+            b: np.ndarray) -> float:
+    """Largest |d ln| between the graph and the estimator (mean and std); raises above the
+    tolerance, so a wrong export never reaches the registry."""
+    mean, std = est.predict(X, return_std=True)
+    ref_mean = mean @ B + b
+    ref_std = np.sqrt((std**2) @ B**2) if kind == "gp" else None
+    got_mean, got_std = predictor.session.run(
+        ["log_mean", "log_std"], {"x": X.astype(predictor._dtype)})
+    worst = float(np.abs(got_mean - ref_mean).max())
+    if ref_std is not None:
+        worst = max(worst, float(np.abs(got_std - ref_std).max()))
+    if not worst <= PARITY_TOL[kind]:
+        raise RuntimeError(f"exported {kind} graph differs from the estimator by {worst:.3g} "
+                           f"in log amplitude (tolerance {PARITY_TOL[kind]})")
+    return worst
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, tuple):
+        return list(v)
+    return v if isinstance(v, (int, float, str, bool, type(None), list)) else str(v)
