@@ -61,6 +61,7 @@ __all__ = [
     "plan_samples",
     "run_chunk",
     "run_sample",
+    "unit_histories",
 ]
 
 _SCHEDULER_RE = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
@@ -182,7 +183,9 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
 
     t0 = time.perf_counter()
     try:
-        out = outputs_from_result(simulate(scene_from_dict(scene)).to_dict())
+        result = simulate(scene_from_dict(scene))
+        out = outputs_from_result(result.to_dict())
+        out.update(unit_histories(result))
         bad = _non_finite(out)
         out["status"], out["error"] = ("failed", f"NonFiniteResult: {bad}") if bad else ("ok",
                                                                                          None)
@@ -230,6 +233,18 @@ def outputs_from_result(d: Mapping[str, Any]) -> dict[str, Any]:
         out["history_uz_um"] = [p.get("uz_um") for p in points]
         out["history_magnitude_um"] = [p.get("magnitude_um") for p in points]
     return out
+
+
+def unit_histories(result: Any) -> dict[str, Any]:
+    """Center and edge time histories of a transient unit run (the points its
+    ``center_amplitude_um`` / ``edge_amplitude_um`` are taken at), as [[u_r], [u_z], [u_theta]]
+    lists in um on the theta = 0 meridian; empty for a steady run or a point load."""
+    h = result.histories
+    if h is None or result.edge_mm is None:
+        return {}
+    n = result.r_mm.size  # histories hold the probes, then the center, then the edge
+    return {f"history_{name}_um": (h.u[:, n + i, :].T * 1e6).tolist()
+            for i, name in enumerate(("center", "edge"))}
 
 
 def _non_finite(out: Mapping[str, Any]) -> str:

@@ -23,7 +23,8 @@ under-resolved mesh; "; "-joined, null if none). Then one column per space param
 outputs: centre/edge amplitudes [um], normalized edge amplitude [-], the surface profile
 (list columns ``profile_distance_mm``, ``profile_uz_um``, ``profile_magnitude_um``) and, for
 transient scenes, time histories (``history_t_s``, ``history_r_mm`` and per-point lists
-``history_uz_um``, ``history_magnitude_um``). The key of a row is (source, sample_id).
+``history_uz_um``, ``history_magnitude_um``; for a unit also ``history_center_um`` and
+``history_edge_um``, each [u_r, u_z, u_theta]). The key of a row is (source, sample_id).
 """
 
 from __future__ import annotations
@@ -92,6 +93,9 @@ OUTPUT_FIELDS = [
     pa.field("history_r_mm", _F64_LIST),
     pa.field("history_uz_um", pa.list_(_F64_LIST)),
     pa.field("history_magnitude_um", pa.list_(_F64_LIST)),
+    # transient unit runs: [u_r, u_z, u_theta] histories (um) at the center and edge points
+    pa.field("history_center_um", pa.list_(_F64_LIST)),
+    pa.field("history_edge_um", pa.list_(_F64_LIST)),
 ]
 STATUSES = ("ok", "failed")
 

@@ -1,0 +1,1 @@
+"""Run-time predictors: numpy (+ onnxruntime) only; no fem, torch, sklearn or pysindy."""
