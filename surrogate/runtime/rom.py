@@ -11,17 +11,23 @@ Model (SI inside; um and ms only in names at the edges):
   ``|omega_T| > omega`` and ``tau_spindown`` otherwise, omega clamped at >= 0 (reverse drive
   brakes, never spins the motor backwards). The voltage is held constant between the given
   samples and every step is integrated exactly.
-- Envelope states x = (center, edge) in um, linear with the speed-dependent forcing
-  ``dx/dt = A x + B q(s, d)``, s = omega / omega_rated, q the feature vector named in the
-  coefficients file (powers of s times design features d; the unbalance force m e omega^2
-  makes s^2 the leading term, higher powers carry the frequency dependence of the compliance).
-  Each step is integrated exactly for a forcing linear in time between the samples (a
-  first-order-hold exponential integrator), so any time step is stable.
+- Complex envelopes: every displacement component c of a point (u_r, u_theta at the center;
+  u_r, u_z, u_theta at the edge) is u_c(t) = Re(z_c(t) e^{i phi(t)}), phi the rotor angle, and
+  the point's envelope is sqrt(sum_c |z_c|^2) (in steady running the harmonic magnitude
+  sqrt(|U_r|^2 + |U_z|^2 + |U_t|^2)). Each z_c = p + i q (um) follows one damped mode seen from
+  the rotating frame of the force m e omega^2:
+  ``dz/dt = (A(d) + omega(t) J) z + b(d) s^2``, J = [[0, 1], [-1, 0]] (the frame rotation,
+  known exactly), s = omega / omega_rated, A(d) = A0 + sum_j d_j A_j and b(d) = b0 + sum_j d_j
+  b_j affine in design features d (each about -1..1). The eigenvalues of A0 are the mode's
+  damping (real part, 1/s) and natural frequency (imaginary part, rad/s).
+  Each step is integrated exactly for omega and s^2 held at their step averages (an
+  exponential integrator: any time step is stable).
 
-Blow-up guard: the identified A must have eigenvalues with negative real parts (else
-:class:`RomBlowUpError` at load), and a simulation whose state leaves the finite bound stored
-with the model (a multiple of the largest trained envelope) stops with :class:`RomBlowUpError`
-naming the time, instead of returning garbage.
+Blow-up guard: at load, A(d) + omega J must have eigenvalues with negative real parts over a
+grid of the trained design box and speeds (else :class:`RomBlowUpError`); ``simulate`` checks
+the actual design the same way (a clean refusal for an extrapolated design that would be
+unstable), and a state leaving the finite bound stored with the model (a multiple of the
+largest trained envelope) stops with :class:`RomBlowUpError` naming the time.
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ __all__ = [
     "RomBlowUpError",
     "RomInputError",
     "design_features",
-    "forcing_features",
+    "design_grid",
     "load_envelope_model",
     "motor_speed",
 ]
@@ -132,29 +138,19 @@ def design_features(design: Mapping[str, Any], spec: Mapping[str, Any]) -> dict[
     return out
 
 
-def forcing_features(s: NDArray, d: Mapping[str, float], names: list[str]) -> NDArray:
-    """(nt, len(names)) features ``s^p`` or ``s^p*NAME`` (NAME a design feature) at speed
-    ratios ``s``."""
-    cols = []
-    for name in names:
-        power, _, factor = name.partition("*")
-        if not power.startswith("s^"):
-            raise ValueError(f"forcing feature {name!r}: expected 's^P' or 's^P*NAME'")
-        col = s ** int(power[2:])
-        cols.append(col * d[factor] if factor else col)
-    return np.column_stack(cols) if cols else np.zeros((s.size, 0))
-
-
 # --------------------------------------------------------------------------- the model
 
 
+_J = np.array([[0.0, 1.0], [-1.0, 0.0]])  # d/dt of (p, q) from the frame rotation, per rad/s
+
+
 def _expm(m: NDArray) -> NDArray:
-    """Matrix exponential of a small matrix: scaling and squaring with an 18-term Taylor
-    series (double precision for ||m|| / 2^j <= 0.5)."""
-    norm = float(np.max(np.sum(np.abs(m), axis=1)))
+    """Matrix exponentials of a stack (..., n, n) of small matrices: scaling and squaring with
+    an 18-term Taylor series (double precision once ||m|| / 2^j <= 0.5)."""
+    norm = float(np.max(np.sum(np.abs(m), axis=-1))) if m.size else 0.0
     j = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
     a = m / 2.0**j
-    term = np.eye(m.shape[0])
+    term = np.broadcast_to(np.eye(m.shape[-1]), m.shape).copy()
     out = term.copy()
     for k in range(1, 19):
         term = term @ a / k
@@ -165,29 +161,51 @@ def _expm(m: NDArray) -> NDArray:
 
 
 @dataclass(frozen=True)
+class Block:
+    """One complex envelope z = p + i q (um) of displacement ``component`` at ``point``.
+
+    A0 (2, 2) 1/s and b0 (2,) um/s, with per-design-feature increments A_d (nd, 2, 2) and
+    b_d (nd, 2) in the order of ``EnvelopeModel.design_names``."""
+
+    point: str
+    component: str
+    A0: NDArray
+    A_d: NDArray
+    b0: NDArray
+    b_d: NDArray
+
+    def matrices(self, d: NDArray) -> tuple[NDArray, NDArray]:
+        """A(d) (..., 2, 2) and b(d) (..., 2) for design features d (..., nd)."""
+        A = self.A0 + np.einsum("...j,jkl->...kl", d, self.A_d)
+        return A, self.b0 + d @ self.b_d
+
+
+@dataclass(frozen=True)
 class EnvelopeModel:
     """Identified envelope ROM (see module docstring).
 
     Attributes:
-        A: (2, 2) state matrix, 1/s. B: (2, m) forcing matrix, um/s per feature.
-        features: the m forcing-feature names (``s^2``, ``s^2*skin_E_kPa``, ...).
-        spec: design inputs (names, ranges, choices) and interactions.
+        blocks: one complex envelope per (point, component).
+        spec: design inputs (names, ranges, choices), interactions, motor-constant ranges.
         motor: the ERM's steady-speed law.
         bound_um: an envelope above this is a blow-up (um).
-        input_ranges: trained range of every design input and of the voltage.
     """
 
-    A: NDArray
-    B: NDArray
-    features: list[str]
+    blocks: tuple[Block, ...]
     spec: dict[str, Any]
     motor: MotorConstants
     bound_um: float
 
     @property
+    def design_names(self) -> list[str]:
+        """Design features d, in the order of the A_d / b_d rows."""
+        names = [item["name"] for item in self.spec["design"]]
+        return names + [f"{a}*{b}" for a, b in self.spec.get("interactions", [])]
+
+    @property
     def input_names(self) -> tuple[str, ...]:
-        return tuple(item["name"] for item in self.spec["design"]) + ("tau_spinup_ms",
-                                                                       "tau_spindown_ms")
+        return (*(item["name"] for item in self.spec["design"]), "tau_spinup_ms",
+                "tau_spindown_ms")
 
     @property
     def input_ranges(self) -> dict[str, Any]:
@@ -198,9 +216,22 @@ class EnvelopeModel:
         out.update({k: tuple(v) for k, v in self.spec["motor_ranges"].items()})
         return out
 
-    def eigenvalues(self) -> NDArray:
-        """Eigenvalues of A, 1/s."""
-        return np.linalg.eigvals(self.A)
+    def features(self, design: Mapping[str, Any]) -> NDArray:
+        """Design feature vector d of a (checked) design mapping."""
+        d = design_features(design, self.spec)
+        return np.array([d[name] for name in self.design_names])
+
+    def max_growth_rate(self, d: NDArray) -> float:
+        """Largest real part (1/s) of the eigenvalues of A(d) + omega J over the design
+        features ``d`` (..., nd) and speeds 0..1.5 omega_rated: < 0 means every frozen
+        state of the model decays."""
+        omegas = np.linspace(0.0, 1.5 * self.motor.rated_omega, 31)
+        worst = -math.inf
+        for blk in self.blocks:
+            A, _ = blk.matrices(d)
+            M = A[..., None, :, :] + omegas[:, None, None] * _J
+            worst = max(worst, float(np.max(np.linalg.eigvals(M).real)))
+        return worst
 
     def simulate(self, t_s: Any, volts: Any, design: Mapping[str, Any], *,
                  extrapolate: bool = False) -> dict[str, NDArray]:
@@ -209,47 +240,44 @@ class EnvelopeModel:
         (``input_names``; motor time constants in ms). Returns ``center_envelope_um``,
         ``edge_envelope_um`` and ``speed_hz`` (rev/s). Raises :class:`RomInputError` for bad
         input (out of the trained range unless ``extrapolate``) and :class:`RomBlowUpError`
-        if the state leaves ``bound_um``."""
+        for a design whose model is unstable or a state leaving ``bound_um``."""
         t, v = self._check_drive(t_s, volts)
         dsg = self._check_design(design, extrapolate)
+        d = self.features(dsg)
+        if extrapolate and self.max_growth_rate(d) >= 0.0:
+            raise RomBlowUpError(f"the model is unstable for this (extrapolated) design "
+                                 f"{dict(dsg)}: refusing to simulate")
         omega = motor_speed(t, v, dsg["tau_spinup_ms"] * 1e-3, dsg["tau_spindown_ms"] * 1e-3,
                             self.motor)
-        q = forcing_features(omega / self.motor.rated_omega, design_features(dsg, self.spec),
-                             self.features)
-        x = self._integrate(t, q @ self.B.T)
-        x = np.maximum(x, 0.0)  # an envelope is a magnitude: clip linear undershoot near rest
-        return {STATES[0]: x[:, 0], STATES[1]: x[:, 1], "speed_hz": omega / (2 * math.pi)}
+        z = self._integrate(t, omega, d)
+        out: dict[str, NDArray] = {}
+        for point, name in zip(("center", "edge"), STATES, strict=True):
+            rows = [i for i, blk in enumerate(self.blocks) if blk.point == point]
+            out[name] = np.sqrt(np.sum(z[:, rows, :] ** 2, axis=(1, 2)))
+        out["speed_hz"] = omega / (2 * math.pi)
+        return out
 
-    def _integrate(self, t: NDArray, g: NDArray) -> NDArray:
-        """x' = A x + g(t), g linear between samples, x(t_0) = 0; exact per step."""
-        n = self.A.shape[0]
-        x = np.zeros((t.size, n))
+    def _integrate(self, t: NDArray, omega: NDArray, d: NDArray) -> NDArray:
+        """(nt, n_blocks, 2) states from rest; omega and s^2 at their step averages."""
         h = np.diff(t)
-        cache: dict[float, tuple[NDArray, NDArray, NDArray]] = {}
-        for k in range(h.size):  # the recurrence is sequential; step matrices are cached
-            key = round(float(h[k]), 15)
-            if key not in cache:
-                cache[key] = self._step_matrices(h[k])
-            phi, g0, g1 = cache[key]
-            x[k + 1] = phi @ x[k] + g0 @ g[k] + g1 @ g[k + 1]
+        w = 0.5 * (omega[1:] + omega[:-1])
+        s2 = 0.5 * ((omega[1:] / self.motor.rated_omega) ** 2
+                    + (omega[:-1] / self.motor.rated_omega) ** 2)
+        nb = len(self.blocks)
+        aug = np.zeros((h.size, nb, 3, 3))
+        for i, blk in enumerate(self.blocks):
+            A, b = blk.matrices(d)
+            aug[:, i, :2, :2] = (A[None] + w[:, None, None] * _J) * h[:, None, None]
+            aug[:, i, :2, 2] = b[None] * (s2 * h)[:, None]
+        e = _expm(aug)
+        phi, gamma = e[..., :2, :2], e[..., :2, 2]
+        x = np.zeros((t.size, nb, 2))
+        for k in range(h.size):  # the recurrence is sequential; step matrices are batched
+            x[k + 1] = np.einsum("bij,bj->bi", phi[k], x[k]) + gamma[k]
             if not np.all(np.isfinite(x[k + 1])) or np.max(np.abs(x[k + 1])) > self.bound_um:
-                raise RomBlowUpError(f"envelope diverged at t = {t[k + 1]:.6g} s (state "
-                                     f"{x[k + 1].tolist()} um beyond the model's bound "
-                                     f"{self.bound_um:g} um)")
+                raise RomBlowUpError(f"envelope diverged at t = {t[k + 1]:.6g} s (beyond the "
+                                     f"model's bound {self.bound_um:g} um)")
         return x
-
-    def _step_matrices(self, h: float) -> tuple[NDArray, NDArray, NDArray]:
-        # Augmented exponential [[A, I, 0], [0, 0, I/h], [0, 0, 0]] * h gives, for a forcing
-        # g0 + (g1 - g0) s / h, x(h) = Phi x0 + G1 g0 + G2 (g1 - g0) (first-order hold).
-        n = self.A.shape[0]
-        m = np.zeros((3 * n, 3 * n))
-        m[:n, :n] = self.A * h
-        m[:n, n:2 * n] = np.eye(n) * h
-        m[n:2 * n, 2 * n:] = np.eye(n)
-        e = _expm(m)
-        phi, g1, g2 = e[:n, :n], e[:n, n:2 * n], e[:n, 2 * n:]
-        return phi, g1 - g2, g2
-
     def _check_drive(self, t_s: Any, volts: Any) -> tuple[NDArray, NDArray]:
         t = np.asarray(t_s, dtype=float)
         v = np.asarray(volts, dtype=float)
@@ -303,23 +331,40 @@ class EnvelopeModel:
 
 
 def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
-    """An :class:`EnvelopeModel` from the coefficients JSON dict (``FORMAT``)."""
+    """An :class:`EnvelopeModel` from the coefficients JSON dict (``FORMAT``); raises
+    ValueError for a malformed dict and :class:`RomBlowUpError` for an unstable model."""
     if d.get("format") != FORMAT:
         raise ValueError(f"format: expected {FORMAT!r}, got {d.get('format')!r}")
-    A = np.asarray(d["A"], dtype=float)
-    B = np.asarray(d["B"], dtype=float)
-    feats = list(d["features"])
-    if A.shape != (2, 2) or B.shape != (2, len(feats)):
-        raise ValueError(f"A must be 2x2 and B 2x{len(feats)}, got {A.shape} and {B.shape}")
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
-        raise ValueError("A and B must be finite")
-    model = EnvelopeModel(A, B, feats, dict(d["spec"]), MotorConstants(**d["motor"]),
+    spec = dict(d["spec"])
+    nd = len(spec["design"]) + len(spec.get("interactions", []))
+    blocks = []
+    for i, blk in enumerate(d["blocks"]):
+        arrays = [np.asarray(blk[k], dtype=float) for k in ("A0", "A_d", "b0", "b_d")]
+        shapes = [(2, 2), (nd, 2, 2), (2,), (nd, 2)]
+        for key, arr, shape in zip(("A0", "A_d", "b0", "b_d"), arrays, shapes, strict=True):
+            if arr.shape != shape or not np.all(np.isfinite(arr)):
+                raise ValueError(f"blocks[{i}].{key}: need finite values of shape {shape}, "
+                                 f"got {arr.shape}")
+        blocks.append(Block(str(blk["point"]), str(blk["component"]), *arrays))
+    model = EnvelopeModel(tuple(blocks), spec, MotorConstants(**d["motor"]),
                           float(d["bound_um"]))
-    eig = model.eigenvalues()
-    if np.any(eig.real >= 0.0):
-        raise RomBlowUpError(f"the model's linear part is unstable: eigenvalues of A "
-                             f"{eig.tolist()} 1/s (need negative real parts)")
+    rate = model.max_growth_rate(design_grid(model))
+    if rate >= 0.0:
+        raise RomBlowUpError(f"the model's linear part is unstable: an eigenvalue of A(d) + "
+                             f"omega J has real part {rate:.4g} 1/s >= 0 in the trained range")
     return model
+
+
+def design_grid(model: EnvelopeModel) -> NDArray:
+    """Design features over the trained box: continuous inputs at -1, 0, 1, every choice of
+    the categorical ones; (n, nd)."""
+    axes = [[-1.0, 1.0] if "choices" in item else [-1.0, 0.0, 1.0]
+            for item in model.spec["design"]]
+    names = [item["name"] for item in model.spec["design"]]
+    grid = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(axes), -1).T
+    cols = [grid] + [grid[:, [names.index(a)]] * grid[:, [names.index(b)]]
+                     for a, b in model.spec.get("interactions", [])]
+    return np.concatenate(cols, axis=1)
 
 
 def load_envelope_model(path: str | Path) -> EnvelopeModel:
