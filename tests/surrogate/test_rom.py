@@ -121,7 +121,7 @@ def test_transient_matches_a_fine_ode_solution_and_converges_in_the_step():
     env_ref = np.hypot(*ref.y)
     errs = []
     for n in (121, 241, 481):
-        t, env = rom(n)
+        _, env = rom(n)
         errs.append(np.max(np.abs(env[:: (n - 1) // 120] - env_ref)) / env_ref.max())
     assert errs[-1] < 2e-3
     assert errs[1] < errs[0] and errs[2] < errs[1]  # converges as the step shrinks
