@@ -377,6 +377,18 @@ def evaluate(model: EnvelopeModel, runs: Sequence[Run]) -> dict[str, Any]:
 # --------------------------------------------------------------------------- training + card
 
 
+def _finite(obj: Any) -> Any:
+    """``obj`` with every non-finite float (an undefined metric, e.g. an envelope that never
+    decays within the record) replaced by None, so that the card is strict JSON."""
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
@@ -447,9 +459,11 @@ def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-
     }
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        (tmp / "coefficients.json").write_text(json.dumps(coefficients, indent=1) + "\n")
+        (tmp / "coefficients.json").write_text(json.dumps(coefficients, indent=1,
+                                                          allow_nan=False) + "\n")
         card["sha256"] = {"coefficients.json": _sha256(tmp / "coefficients.json")}
-        (tmp / "card.json").write_text(json.dumps(card, indent=1) + "\n")
+        (tmp / "card.json").write_text(json.dumps(_finite(card), indent=1,
+                                                  allow_nan=False) + "\n")
         if out.exists():
             out.rmdir()
         os.replace(tmp, out)
