@@ -239,8 +239,8 @@ def unit_histories(result: Any) -> dict[str, Any]:
     """Center and edge time histories of a transient unit run (the points its
     ``center_amplitude_um`` / ``edge_amplitude_um`` are taken at), as [[u_r], [u_z], [u_theta]]
     lists in um on the theta = 0 meridian; empty for a steady run or a point load."""
-    h = result.histories
-    if h is None or result.edge_mm is None:
+    h = getattr(result, "histories", None)
+    if h is None or getattr(result, "edge_mm", None) is None:
         return {}
     n = result.r_mm.size  # histories hold the probes, then the center, then the edge
     return {f"history_{name}_um": (h.u[:, n + i, :].T * 1e6).tolist()
