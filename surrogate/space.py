@@ -88,6 +88,7 @@ RESERVED_COLUMNS = frozenset({
     "edge_amplitude_um", "normalized_edge", "profile_distance_mm", "profile_uz_um",
     "profile_magnitude_um",
     "history_t_s", "history_r_mm", "history_uz_um", "history_magnitude_um",
+    "history_center_um", "history_edge_um",
 })
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _SEGMENT_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
