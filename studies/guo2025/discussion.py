@@ -94,13 +94,13 @@ def _discuss_pogo(r: Mapping[str, Solved], checks: Mapping[str, Section]) -> str
     if "d" in checks:
         d = checks["d"].data
         ratios = [x["ratio"] for x in d.values()]
-        near = [k for k, x in d.items() if near(x["ratio"], PAPER_POGO_RATIO)]
+        at_paper = [k for k, x in d.items() if near(x["ratio"], PAPER_POGO_RATIO)]
         text += (f" The tip footprint, an arbitrary choice once the pins are a ring, moves "
                  f"A-C-D between {pct(d['tip0.25']['acd'])} (0.25 mm) and "
                  f"{pct(d['tip1']['acd'])} (1 mm); halving or doubling the spring constant "
                  f"gives {pct(d['k0.5']['acd'])} - {pct(d['k2']['acd'])}. The bare pogo ratio "
                  f"stays within {min(ratios):.2f} - {max(ratios):.2f}"
-                 + (f", reaching x{PAPER_POGO_RATIO:g} for {_list(near)}." if near
+                 + (f", reaching x{PAPER_POGO_RATIO:g} for {_list(at_paper)}." if at_paper
                     else f", far from x{PAPER_POGO_RATIO:g}."))
     return text
 
