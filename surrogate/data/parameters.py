@@ -19,7 +19,8 @@ from fieldspec import REQUIRED, Context, Spec, read_fields, read_table
 from surrogate.data.errors import SpaceError
 from surrogate.data.scene_paths import parse_path
 
-__all__ = ["MAPS", "PARAM_TYPES", "RESERVED_COLUMNS", "SCALES", "Parameter", "read_parameter"]
+__all__ = ["MAPS", "PARAM_TYPES", "RESERVED_COLUMNS", "SCALES", "Parameter", "read_parameter",
+           "round_significant"]
 
 PARAM_TYPES = ("continuous", "integer", "categorical", "fixed")
 SCALES = ("linear", "log")
@@ -70,14 +71,21 @@ class Parameter:
             return "int64"
         return _scalar_type(list(self.choices) if self.type == "categorical" else [self.value])
 
-    def from_unit(self, u: np.ndarray) -> np.ndarray:
-        """Map unit-interval coordinates u in [0, 1) to parameter values (vectorised)."""
+    def from_unit(self, u: np.ndarray, significant_digits: int = 0) -> np.ndarray:
+        """Map unit-interval coordinates u in [0, 1) to parameter values (vectorised).
+
+        Continuous values are rounded to ``significant_digits`` (0: not rounded) so that the
+        same point gives the same value, and so the same scene hash, on every machine: the
+        last bit of ``np.exp`` and of the sequence arithmetic differs between platforms and
+        BLAS builds."""
         u = np.clip(np.asarray(u, dtype=float), 0.0, np.nextafter(1.0, 0.0))
         if self.type == "continuous":
             lo, hi = float(self.low), float(self.high)  # type: ignore[arg-type]
             if self.scale == "log":
-                return np.exp(math.log(lo) + u * (math.log(hi) - math.log(lo)))
-            return lo + u * (hi - lo)
+                x = np.exp(math.log(lo) + u * (math.log(hi) - math.log(lo)))
+            else:
+                x = lo + u * (hi - lo)
+            return np.clip(round_significant(x, significant_digits), lo, hi)
         if self.type == "integer":
             lo, hi = int(self.low), int(self.high)  # type: ignore[arg-type]
             return np.minimum(lo + np.floor(u * (hi - lo + 1)).astype(np.int64), hi)
@@ -132,6 +140,14 @@ class Parameter:
         if self.description:
             d["description"] = self.description
         return d
+
+
+def round_significant(x: np.ndarray, digits: int) -> np.ndarray:
+    """``x`` rounded to ``digits`` significant decimal digits through its decimal text (exact
+    and platform independent); ``digits = 0`` returns ``x`` unchanged."""
+    if digits <= 0:
+        return x
+    return np.array([float(f"{v:.{digits}g}") for v in np.ravel(x)]).reshape(np.shape(x))
 
 
 def _scalar_type(values: Sequence[Any]) -> str:

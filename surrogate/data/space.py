@@ -8,6 +8,7 @@ Layout (``datasets/spaces/default.toml`` is a commented example)::
     sampler = "sobol"                # sobol | halton | lhs | random   (surrogate.sampling)
     seed = 2025                      # integer >= 0
     lhs_batch = 256                  # batch size of the extendable LHS / random designs
+    significant_digits = 12          # continuous values rounded to this many digits (0: not)
     base_scene = "scene.toml"        # optional scene file, relative to this file
 
     [base]                           # scene overrides (TOML-shaped, fem.scene schema),
@@ -71,6 +72,9 @@ from surrogate.data.scene_paths import deep_merge, format_path, parse_path, set_
 __all__ = ["Space", "SpaceError", "check_space", "load_space", "space_from_dict"]
 
 _PROBE_POINTS = 32  # points used to check that every parameter reaches the scene
+#: Continuous sampled values are stored and hashed rounded to this many significant digits:
+#: far below any physical tolerance, far above the last-bit differences between machines.
+SIGNIFICANT_DIGITS = 12
 
 @dataclass(frozen=True)
 class Space:
@@ -87,6 +91,7 @@ class Space:
     lhs_batch: int = LHS_BATCH_DEFAULT
     description: str = ""
     constraints: tuple[Constraint, ...] = ()
+    significant_digits: int = SIGNIFICANT_DIGITS
 
     @functools.cached_property
     def defaults(self) -> dict[str, Any]:
@@ -124,7 +129,8 @@ class Space:
         cols: dict[str, np.ndarray] = {}
         free = iter(range(u.shape[1]))
         for p in self.parameters:
-            cols[p.name] = p.from_unit(u[:, next(free)] if p.free else np.zeros(len(u)))
+            cols[p.name] = p.from_unit(u[:, next(free)] if p.free else np.zeros(len(u)),
+                                       self.significant_digits)
         return cols
 
     def points(self, start: int, n: int) -> dict[str, np.ndarray]:
@@ -198,6 +204,8 @@ class Space:
         """Self-contained TOML-shaped dict (``base_scene`` already merged into ``base``)."""
         head: dict[str, Any] = {"name": self.name, "sampler": self.sampler, "seed": self.seed,
                                 "lhs_batch": self.lhs_batch}
+        if self.significant_digits:  # 0 (no rounding) is how spaces were before the key existed
+            head["significant_digits"] = self.significant_digits
         if self.description:
             head["description"] = self.description
         d: dict[str, Any] = {"space": head, "base": copy.deepcopy(self.base),
@@ -235,6 +243,7 @@ _SPACE_HEAD = {
     "sampler": Spec(str, "sobol", choices=SAMPLERS),
     "seed": Spec(int, 0, "[0, 9.2e18]"),
     "lhs_batch": Spec(int, LHS_BATCH_DEFAULT, "[1, 1048576]"),
+    "significant_digits": Spec(int, SIGNIFICANT_DIGITS, "[0, 17]"),
     "base_scene": Spec(str, None),
 }
 _FILE_KEYS = ("space", "base", "parameter", "constraint")
@@ -263,7 +272,8 @@ def space_from_dict(d: Mapping[str, Any], base_dir: str | Path | None = None,
                                    read_constraint(raw, i, names), noun="constraints"))
     space = Space(name=head["name"], parameters=params, base=base, sampler=head["sampler"],
                   seed=head["seed"], lhs_batch=head["lhs_batch"],
-                  description=head["description"], constraints=constraints)
+                  description=head["description"], constraints=constraints,
+                  significant_digits=head["significant_digits"])
     if check_scenes:
         check_space(space)
     return space

@@ -32,6 +32,7 @@ transient scenes, time histories (``history_t_s``, ``history_r_mm`` and per-poin
 from __future__ import annotations
 
 import contextlib
+import copy
 import datetime as _dt
 import errno
 import fcntl
@@ -195,7 +196,10 @@ class Store:
         """The space recorded in the manifest (scene checks skipped: it was checked when
         the dataset was created)."""
         if self._space is None:
-            self._space = space_from_dict(self.manifest["space"], check_scenes=False)
+            recorded = copy.deepcopy(self.manifest["space"])
+            # Datasets made before sampled values were rounded: their points are not rounded.
+            recorded.setdefault("space", {}).setdefault("significant_digits", 0)
+            self._space = space_from_dict(recorded, check_scenes=False)
         return self._space
 
     @property
