@@ -23,7 +23,10 @@ from dataclasses import dataclass
 
 __all__ = [
     "ALIASES",
+    "BONE_LOSS_FACTOR",
     "MATERIALS",
+    "SILICONE_LOSS_FACTOR",
+    "SOFT_TISSUE_LOSS_FACTOR",
     "Material",
     "SILICONE_E_NEO_HOOKEAN_Pa",
     "SILICONE_E_TENSILE_FIT_Pa",
@@ -108,9 +111,29 @@ class UnknownMaterialError(KeyError, ValueError):
 
 _TISSUE_SRC = "Guo et al. 2025 (Biomimetics 10:597) Table 1"
 
+#: Hysteretic loss factor of living soft tissue (skin, fat, muscle) at 50-250 Hz. In vivo MR
+#: and ultrasound elastography report loss tangents G''/G' of roughly 0.1-0.5 in this band
+#: (e.g. Klatt et al. 2007, Phys. Med. Biol. 52:7281, multifrequency MRE, 25-62.5 Hz: 0.3-0.5
+#: for soft organs); the Voigt fit of human skin surface impedance of von Gierke et al. 1952
+#: (J. Acoust. Soc. Am. 24:490) implies more (about 3.8 at 100 Hz). 0.3 is a mid value of the
+#: elastography range and the conservative side of the impedance data: less damping, more
+#: crosstalk predicted. Guo et al. 2025 give none (their model is undamped).
+SOFT_TISSUE_LOSS_FACTOR = 0.3
+#: Cortical bone: loss tangent about 0.01-0.03 from 1 to 100 Hz (Lakes, Katz and Sternstein
+#: 1979, J. Biomech. 12:657).
+BONE_LOSS_FACTOR = 0.02
+#: Platinum-cure silicone elastomers at 100-250 Hz: no datasheet gives a loss factor;
+#: dynamic tests of soft silicones put tan delta around 0.05-0.3. 0.1 is an estimate.
+SILICONE_LOSS_FACTOR = 0.1
 
-def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str) -> Material:
-    return Material(name, E_kPa * 1e3, density, nu, 0.0, f"{_TISSUE_SRC}: {layer}")
+
+def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str,
+            loss_factor: float = SOFT_TISSUE_LOSS_FACTOR) -> Material:
+    damping = ("loss factor: cortical bone, Lakes et al. 1979" if layer == "skeleton"
+               else "loss factor: soft-tissue elastography range 0.1-0.5, mid value "
+               "(see SOFT_TISSUE_LOSS_FACTOR)")
+    return Material(name, E_kPa * 1e3, density, nu, loss_factor,
+                    f"{_TISSUE_SRC}: {layer}; {damping}")
 
 
 #: Smooth-On datasheet 100 % tensile modulus [Pa] (Ecoflex 00-10, 00-50, Dragon Skin 10
@@ -155,16 +178,17 @@ def _silicone(name: str) -> Material:
         f"from the 100 % modulus (default); a tensile-data fit (Marechal et al., Soft Robotics "
         f"Materials Database) gives {SILICONE_E_TENSILE_FIT_Pa[name] / 1e3:g} kPa "
         f"(SILICONE_E_TENSILE_FIT_Pa). nu 0.49: nearly incompressible, as cured silicone "
-        f"rubber is."
+        f"rubber is. Loss factor {SILICONE_LOSS_FACTOR:g}: an estimate (no datasheet value)."
     )
-    return Material(name, SILICONE_E_NEO_HOOKEAN_Pa[name], sg * 1000.0, 0.49, 0.0, source)
+    return Material(name, SILICONE_E_NEO_HOOKEAN_Pa[name], sg * 1000.0, 0.49,
+                    SILICONE_LOSS_FACTOR, source)
 
 
 _ALL = (
     _tissue("skin", 49.0, 1116.0, 0.47, "epidermis and dermis"),
     _tissue("subcutaneous", 10.0, 1116.0, 0.47, "subcutaneous tissue"),
     _tissue("muscle", 53.0, 1116.0, 0.47, "muscle"),
-    _tissue("bone", 2.94e6, 2000.0, 0.32, "skeleton"),
+    _tissue("bone", 2.94e6, 2000.0, 0.32, "skeleton", BONE_LOSS_FACTOR),
     *(_silicone(name) for name in _SILICONE_DATA),
     Material("pcb", 2.5e9, 1420.0, 0.34, 0.0, "DuPont Kapton HN polyimide film datasheet"),
     Material(

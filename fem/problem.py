@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import haptic_unit, loads
+from .absorbers import ELEMENTS_PER_WAVELENGTH
 from .assembly import UR
 from .domain import Domain, MeshSpec, layered_domain
 from .scene import LoadKind, Scene, SceneError, Unit
@@ -109,10 +110,34 @@ def _check_unit_restrained(scene: Scene, effects: dict[str, bool]) -> None:
         raise SceneError("unit.ring_contact", f"a transient spin-up {why}: it would drift away")
 
 
+def shortest_shear_wavelength(scene: Scene) -> tuple[float, str]:
+    """(wavelength [m], part name): the shortest elastic shear wavelength at the drive
+    frequency among the tissue layers and the rings; (inf, "") for a static analysis."""
+    if scene.analysis.kind == "static":
+        return np.inf, ""
+    parts = [(ly.name, ly.solid()) for ly in scene.tissue.layers]
+    if scene.unit is not None:
+        parts += [(ring.name, ring.solid()) for ring in scene.unit.encapsulation]
+    name, solid = min(parts, key=lambda p: p[1].shear_speed_m_s)
+    return 2 * np.pi * solid.shear_speed_m_s / drive_omega(scene), name
+
+
+def wave_element_size(scene: Scene) -> float:
+    """Largest element size [m] with ``absorbers.ELEMENTS_PER_WAVELENGTH / order`` elements
+    per shortest shear wavelength (inf for a static analysis)."""
+    lam, _ = shortest_shear_wavelength(scene)
+    return lam * scene.mesh.order / ELEMENTS_PER_WAVELENGTH
+
+
 def mesh_spec(scene: Scene) -> MeshSpec:
+    """The element sizes [m] the scene is meshed with: its own, capped by the wavelength rule
+    when ``mesh.follow_wavelength``."""
     m = scene.mesh
-    return MeshSpec(m.near_size_mm * 1e-3, m.near_radius_mm * 1e-3, m.far_size_mm * 1e-3,
-                    m.order)
+    near, far = m.near_size_mm * 1e-3, m.far_size_mm * 1e-3
+    if m.follow_wavelength:
+        h = wave_element_size(scene)
+        near, far = min(near, h), min(far, h)
+    return MeshSpec(near, m.near_radius_mm * 1e-3, far, m.order)
 
 
 def drive_omega(scene: Scene) -> float:

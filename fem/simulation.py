@@ -17,7 +17,14 @@ from numpy.typing import NDArray
 from . import SOLVER_VERSION, results, transient_analysis
 from .domain import Domain
 from .haptic_unit import pin_contact_check
-from .problem import Problem, build_problem, drive_omega
+from .problem import (
+    Problem,
+    build_problem,
+    drive_omega,
+    mesh_spec,
+    shortest_shear_wavelength,
+    wave_element_size,
+)
 from .scene import Scene
 from .solve import OperatorLog, solve_mode
 
@@ -200,25 +207,19 @@ def _profile_distances_mm(scene: Scene, edge: float) -> NDArray:
 
 
 def resolution_warning(scene: Scene, problem: Problem) -> str | None:
-    """A message when the mesh has fewer than the recommended elements per shear wavelength in
-    some tissue layer (10 linear or 5 quadratic elements per wavelength keep the phase error
-    near 1 %; 2 mm linear elements are only 7 per wavelength in the fat layer at 120 Hz)."""
-    if scene.analysis.kind == "static":
+    """A message when the largest elements hold fewer than ``ELEMENTS_PER_WAVELENGTH / order``
+    elements per shortest shear wavelength (10 linear or 5 quadratic keep the phase error near
+    1 %). Only possible with ``mesh.follow_wavelength = false``: otherwise the mesh obeys the
+    rule by construction."""
+    lam, part = shortest_shear_wavelength(scene)
+    h = mesh_spec(scene).far_size
+    if not np.isfinite(lam) or h <= wave_element_size(scene) * (1 + 1e-9):
         return None
     f = drive_omega(scene) / (2 * np.pi)
-    need = 10.0 / scene.mesh.order  # elements per wavelength: 10 linear, 5 quadratic
-    worst = None
-    for ly in scene.tissue.layers:
-        c_s = ly.solid().shear_speed_m_s
-        per_wave = c_s / f / (scene.mesh.far_size_mm * 1e-3)
-        if per_wave < need and (worst is None or per_wave < worst[1]):
-            worst = (ly.name, per_wave, c_s / f)
-    if worst is None:
-        return None
-    name, per_wave, lam = worst
-    advice = f"use far_size_mm <= {np.floor(lam * 1e6 / need) / 1e3:g}"
+    per_wave = lam / h
+    advice = f"use far_size_mm <= {np.floor(wave_element_size(scene) * 1e6) / 1e3:g}"
     if scene.mesh.order == 1:
         advice += " or mesh.order = 2"
     return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
-            f"in layer '{name}' at {f:g} Hz with far_size_mm = {scene.mesh.far_size_mm:g} and "
-            f"order {scene.mesh.order}; {advice} (about 1 % error)")
+            f"in '{part}' at {f:g} Hz with far_size_mm = {h * 1e3:g} and order "
+            f"{scene.mesh.order}; {advice}, or mesh.follow_wavelength = true (about 1 % error)")

@@ -18,7 +18,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from surrogate.runtime.encoding import InputSpec, encode, n_features, parse_inputs
 
-__all__ = ["SpaceEncoder", "codes_from_frame", "input_specs", "unit_of"]
+__all__ = ["SpaceEncoder", "codes_from_frame", "input_specs", "unit_of", "used_when"]
 
 #: Unit suffixes of parameter names (the project puts units in names: ``skin_E_kPa``).
 _UNIT_SUFFIXES = {"_kPa": "kPa", "_Pa": "Pa", "_mm": "mm", "_um": "um", "_hz": "Hz",
@@ -34,10 +34,34 @@ def unit_of(name: str) -> str:
     return ""
 
 
+def _paths(p: Mapping[str, Any]) -> list[str]:
+    return [p["path"]] if isinstance(p["path"], str) else list(p["path"])
+
+
+def used_when(p: Mapping[str, Any], parameters: Sequence[Mapping[str, Any]]
+              ) -> tuple[str, float] | None:
+    """(control, minimum) when every path of ``p`` is inside entry ``[k]`` of a list whose
+    length a ``map = "list_length"`` parameter sets: ``p`` changes the scene only when that
+    parameter is at least ``k + 1`` (the smallest such ``k`` over its paths)."""
+    lengths = {_paths(q)[0]: q["name"] for q in parameters
+               if q.get("map") == "list_length" and q["type"] != "fixed"}
+    found: list[tuple[str, int]] = []
+    for path in _paths(p):
+        hit = next(((name, int(path[len(lst) + 1:].split("]")[0]))
+                    for lst, name in lengths.items() if path.startswith(lst + "[")), None)
+        if hit is None:
+            return None
+        found.append(hit)
+    if len({name for name, _ in found}) != 1:
+        return None
+    return (found[0][0], float(min(k for _, k in found) + 1))
+
+
 def input_specs(parameters: Sequence[Mapping[str, Any]], *,
                 categorical: str = "onehot") -> list[InputSpec]:
     """Input specs of the free parameters of a space, given as the manifest's
-    ``space.parameter`` list (fixed parameters are not inputs)."""
+    ``space.parameter`` list (fixed parameters are not inputs), with the condition under
+    which each one is used (:func:`used_when`)."""
     specs = []
     for p in parameters:
         kind = p["type"]
@@ -50,7 +74,8 @@ def input_specs(parameters: Sequence[Mapping[str, Any]], *,
                                    encoding=categorical, **common))
         elif kind in ("continuous", "integer"):
             specs.append(InputSpec(type=kind, low=float(p["low"]), high=float(p["high"]),
-                                   scale=p.get("scale", "linear"), **common))
+                                   scale=p.get("scale", "linear"),
+                                   used_when=used_when(p, parameters), **common))
         else:
             raise ValueError(f"parameter {p['name']}: unsupported type {kind!r}")
     return specs

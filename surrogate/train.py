@@ -58,8 +58,8 @@ def _edge_radius(df: Any) -> np.ndarray:
     derived from the row's resolved scene by the solver's scene model."""
     from surrogate.data.worker import edge_radius_mm
 
-    stored = (df["edge_radius_mm"].to_numpy(dtype=float, copy=True) if "edge_radius_mm" in df.columns
-              else np.full(len(df), np.nan))
+    stored = (df["edge_radius_mm"].to_numpy(dtype=float, copy=True)
+              if "edge_radius_mm" in df.columns else np.full(len(df), np.nan))
     missing = np.isnan(stored)
     stored[missing] = [edge_radius_mm(s) for s in df.loc[missing, "scene_json"]]
     return stored

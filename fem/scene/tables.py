@@ -143,6 +143,7 @@ _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
         "near_radius_mm": Spec(float, MODEL, "(0, tissue.radius_mm]"),
         "far_size_mm": Spec(float, MODEL, "[mesh.near_size_mm, 1000]"),
         "order": Spec(int, MODEL, choices=(1, 2)),
+        "follow_wavelength": Spec(bool, MODEL),
     }),
     "output": (Output, {
         "radii_mm": Spec(tuple, MODEL, "[0, tissue.radius_mm]"),

@@ -379,8 +379,26 @@ def study_context(r: Mapping[str, Solved], ctx: Context) -> Section:
               f"'{default}'. A proxy for how far a neighbour must sit, not a perception model.\n\n"
             + md_table(["design", "centre (um)", "edge (um)", "normalized edge", "below 50 % from",
                       "below 25 % from", f"at {PAPER_TPD_MM:g} mm"], rows))
+    text += "\n\n" + _damping_text(r, protos)
     summary = [[c[0], c[1], c[2], "not reproducible"] for c in claims]
     return Section("6. Context the paper has no FE number for", text, data, summary)
+
+
+def _damping_text(r: Mapping[str, Solved], protos: Sequence[tuple[str, str]]) -> str:
+    """The damping sensitivity: each prototype undamped (the paper's reading) against the
+    library's sourced tissue and silicone loss factors."""
+    rows = []
+    for label, name in protos:
+        s, d = r[name], r[f"{name}/damped"]
+        rows.append([label, um(s.centre_um), um(d.centre_um), um(s.edge_um), um(d.edge_um),
+                     pct(s.norm), pct(d.norm)])
+    return ("**Damping sensitivity (ours, not in the paper).** The paper's model is undamped, "
+            "and so is every case above. Living tissue is lossy at these frequencies; with the "
+            "library's loss factors (soft tissue 0.3, bone 0.02, silicone 0.1; sources in "
+            "`fem.materials` and docs/materials.md):\n\n"
+            + md_table(["design", "centre undamped (um)", "centre damped (um)",
+                        "edge undamped (um)", "edge damped (um)", "normalized undamped",
+                        "normalized damped"], rows))
 
 
 def _fmt_mm(x: float, length: float) -> str:

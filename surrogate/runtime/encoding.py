@@ -12,6 +12,12 @@ and :func:`encode` turns them into the model's feature matrix:
 * integer: the same linear map (ordinal: neighbouring counts are neighbours);
 * categorical: one-hot (one column per choice; ``ordinal`` maps the choice index to [0, 1]).
 
+An input may be *conditional*: ``used_when = (control, minimum)`` says it changes the design
+only when the input ``control`` is at least ``minimum`` (the modulus of a second ring when
+``n_rings >= 2``). Where it does not, its feature is set to 0, so rows that describe the same
+physical design encode the same and the model is not asked to learn a dependence that is not
+there.
+
 The training side (``surrogate.features``) uses this same code, so training and run time
 encode identically by construction.
 """
@@ -52,6 +58,7 @@ class InputSpec:
     unit: str = ""
     encoding: str = "onehot"
     description: str = ""
+    used_when: tuple[str, float] | None = None
 
     def __post_init__(self) -> None:
         if self.type not in INPUT_TYPES:
@@ -102,6 +109,8 @@ class InputSpec:
             d.update(low=self.low, high=self.high, scale=self.scale)
         if self.description:
             d["description"] = self.description
+        if self.used_when is not None:
+            d["used_when"] = {"input": self.used_when[0], "at_least": self.used_when[1]}
         return d
 
     @classmethod
@@ -112,9 +121,16 @@ class InputSpec:
                        high=d.get("high"), scale=str(d.get("scale", "linear")),
                        choices=tuple(str(c) for c in d.get("choices", ())),
                        unit=str(d.get("unit", "")), encoding=str(d.get("encoding", "onehot")),
-                       description=str(d.get("description", "")))
+                       description=str(d.get("description", "")),
+                       used_when=_used_when(d.get("used_when")))
         except KeyError as err:
             raise ValueError(f"input entry {dict(d)!r} lacks {err}") from None
+
+
+def _used_when(entry: Any) -> tuple[str, float] | None:
+    if entry is None:
+        return None
+    return (str(entry["input"]), float(entry["at_least"]))
 
 
 def n_features(specs: Sequence[InputSpec]) -> int:
@@ -209,6 +225,7 @@ def parse_inputs(X: Any, specs: Sequence[InputSpec], *,
 def encode(codes: np.ndarray, specs: Sequence[InputSpec]) -> np.ndarray:
     """Feature matrix (n, n_features(specs)) float64 of validated codes (see module doc)."""
     codes = np.asarray(codes, dtype=float)
+    index = {s.name: j for j, s in enumerate(specs)}
     blocks = []
     for j, spec in enumerate(specs):
         col = codes[:, j]
@@ -222,7 +239,11 @@ def encode(codes: np.ndarray, specs: Sequence[InputSpec]) -> np.ndarray:
         lo, hi = float(spec.low), float(spec.high)  # type: ignore[arg-type]
         if spec.scale == "log":
             col, lo, hi = np.log(col), np.log(lo), np.log(hi)
-        blocks.append(((col - lo) / (hi - lo))[:, None])
+        feature = (col - lo) / (hi - lo)
+        if spec.used_when is not None:
+            control, minimum = spec.used_when
+            feature = np.where(codes[:, index[control]] >= minimum, feature, 0.0)
+        blocks.append(feature[:, None])
     if not blocks:
         return np.zeros((codes.shape[0], 0))
     return np.concatenate(blocks, axis=1)

@@ -89,14 +89,16 @@ def test_bone_a_million_times_stiffer_than_fat_acts_as_a_rigid_base():
 
 
 def test_one_kilohertz_warns_when_under_resolved_and_converges_when_refined():
-    coarse = simulate(scene_from_dict(_with(POGO, analysis={"frequency_hz": 1000.0})))
+    coarse = simulate(scene_from_dict(_with(POGO, analysis={"frequency_hz": 1000.0},
+                                            mesh={"follow_wavelength": False})))
     assert "under-resolved" in coarse.meta["warnings"][0]
     assert "far_size_mm" in coarse.meta["warnings"][0]
+    assert "follow_wavelength" in coarse.meta["warnings"][0]
 
-    def run(level):  # a shallow forearm keeps the 1 kHz mesh small
+    def run(level, follow=False, far=0.3):  # a shallow forearm keeps the 1 kHz mesh small
         d = _with(POGO, analysis={"frequency_hz": 1000.0},
                   mesh={"near_size_mm": 0.25 * level, "near_radius_mm": 12.0,
-                        "far_size_mm": 0.3 * level},
+                        "far_size_mm": far * level, "follow_wavelength": follow},
                   tissue={"radius_mm": 15.0},
                   output={"radii_mm": [0.0, 4.0, 8.0], "profile_length_mm": 5.0})
         skin, fat, muscle, _ = d["tissue"]["layer"]
@@ -107,6 +109,10 @@ def test_one_kilohertz_warns_when_under_resolved_and_converges_when_refined():
     fine, finer = run(1.0), run(0.7)
     assert "warnings" not in fine.meta
     assert np.allclose(_amplitudes(fine), _amplitudes(finer), rtol=0.03)
+    # Following the wavelength, a 2 mm far size asked for is capped to what 1 kHz needs.
+    followed = run(1.0, follow=True, far=2.0)
+    assert "warnings" not in followed.meta
+    assert np.allclose(_amplitudes(followed), _amplitudes(finer), rtol=0.03)
 
 
 def test_default_quadratic_mesh_raises_no_resolution_warning():
