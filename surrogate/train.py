@@ -66,13 +66,14 @@ def _edge_radius(df: Any) -> np.ndarray:
 
 
 def _merge_specs(a: list[InputSpec], b: list[InputSpec], where: str) -> list[InputSpec]:
-    if [(s.name, s.type, s.choices, s.scale) for s in a] != \
-            [(s.name, s.type, s.choices, s.scale) for s in b]:
+    if [(s.name, s.type, s.choices, s.scale, s.used_when) for s in a] != \
+            [(s.name, s.type, s.choices, s.scale, s.used_when) for s in b]:
         raise ValueError(f"{where}: its space's inputs differ from the first dataset's "
                          f"({[s.name for s in b]} vs {[s.name for s in a]})")
     return [s if s.type == "categorical" else
             InputSpec(name=s.name, type=s.type, low=min(s.low, t.low), high=max(s.high, t.high),
-                      scale=s.scale, unit=s.unit, description=s.description)
+                      scale=s.scale, unit=s.unit, description=s.description,
+                      used_when=s.used_when)
             for s, t in zip(a, b, strict=True)]
 
 

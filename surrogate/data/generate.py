@@ -136,8 +136,12 @@ def _check_compatible(store: Store, space: Space, solver: Mapping[str, Any],
 def generate(space: Space | str | Path, n: int, out: str | Path, *,
              scheduler: Any = None, workers: int | None = None, chunk: int | None = None,
              flush_every: int = 256, flush_seconds: float = 10.0, progress: bool = True,
-             allow_solver_change: bool = False, command: str = "") -> GenerateReport:
+             allow_solver_change: bool = False, command: str = "",
+             only: Sequence[int] | None = None) -> GenerateReport:
     """Make dataset ``out`` hold the first ``n`` distinct feasible samples of ``space``.
+
+    ``only``: run just the planned samples with these sequence indices (active learning picks
+    them, ``surrogate.refine``); the dataset's target size is then left as it was.
 
     ``space`` is a :class:`Space` or a TOML path; ``scheduler`` None (local process pool of
     ``workers`` processes, default all cores), "tcp://HOST:PORT" or a ``distributed.Client``.
@@ -157,6 +161,10 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
         raise DatasetError("out", f"{out} exists and is not a hapticrom dataset (nor an empty "
                            "directory)")
     planned, stats = plan_samples(space, int(n))
+    if only is not None:
+        wanted = {int(i) for i in only}
+        planned = [p for p in planned if p.index in wanted]
+        stats = PlanStats()  # a selection says nothing about how the sequence was scanned
     backend: Any = DaskBackend(scheduler) if scheduler is not None else None
     try:
         if store is None:

@@ -90,11 +90,14 @@ def test_normal_load_solves_mode_0_only():
 
 
 def test_fixed_side_adds_no_absorber_and_loss_factor_switches_hysteresis_on():
-    res = simulate(_scene(tissue__side="fixed"))
+    d = scene_to_dict(load_scene(EXAMPLE))
+    d["tissue"]["side"] = "fixed"
+    for layer in d["tissue"]["layer"]:
+        layer["loss_factor"] = 0.0
+    res = simulate(scene_from_dict(d))
     assert "PML" not in " ".join(res.meta["operators"])
     assert "absorbing boundary" in res.meta["skipped"]
     assert "hysteretic damping" in res.meta["skipped"]
-    d = scene_to_dict(load_scene(EXAMPLE))
     d["tissue"]["layer"][0]["loss_factor"] = 0.2
     lossy = simulate(scene_from_dict(d))
     assert "hysteretic damping" in lossy.meta["effects"]

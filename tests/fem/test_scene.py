@@ -60,7 +60,8 @@ def test_defaults_are_the_paper_forearm() -> None:
     s = scene_from_dict({})
     got = [(la.name, la.thickness_mm, la.E_kPa, la.density_kg_m3, la.nu) for la in s.tissue.layers]
     assert got == PAPER_FOREARM
-    assert all(la.loss_factor == 0.0 for la in s.tissue.layers)
+    # Damping is not the paper's (its model is undamped) but the sourced library default.
+    assert [la.loss_factor for la in s.tissue.layers] == [0.3, 0.3, 0.3, 0.02]
     assert s.tissue.depth_mm == pytest.approx(41.9)
     assert (s.tissue.radius_mm, s.tissue.side, s.tissue.base) == (50.0, "absorbing", "fixed")
     assert s.load == Load("pressure_patch", "normal", 2.0, 1000.0, 1.0)
@@ -114,7 +115,8 @@ def test_round_trip_custom_scene() -> None:
     s = scene_from_dict(d)
     silicone, custom, unnamed = s.tissue.layers
     # material values, overridden by the explicit E; the canonical name replaces the alias
-    assert silicone == Layer("ecoflex-00-10", 1.0, 21.0, 1040.0, 0.49, 0.0, "ecoflex-00-10")
+    assert silicone == Layer("ecoflex-00-10", 1.0, 21.0, 1040.0, 0.49,
+                             MATERIALS["ecoflex-00-10"].loss_factor, "ecoflex-00-10")
     assert custom.material is None and custom.loss_factor == 0.3
     assert unnamed.name == "layer2"
     assert s.output.radii_mm == (20.0, 0.0, 3.5)  # stored as given, not sorted
@@ -127,7 +129,7 @@ def test_to_dict_is_toml_shaped_and_complete() -> None:
     assert list(d) == ["tissue", "load", "analysis", "mesh", "output"]
     assert len(d["tissue"]["layer"]) == 4
     assert d["mesh"] == {"near_size_mm": 0.5, "near_radius_mm": 8.0, "far_size_mm": 2.0,
-                         "order": 2}
+                         "order": 2, "follow_wavelength": True}
 
 
 def test_transient_analysis_round_trip() -> None:
@@ -410,7 +412,7 @@ def test_load_scene_validates(tmp_path: Path) -> None:
     f = tmp_path / "s.toml"
     f.write_text("[[tissue.layer]]\nmaterial = 'Fat'\nthickness_mm = 3\n[load]\nradius_mm = 1\n")
     s = load_scene(f)
-    assert s.tissue.layers == (Layer("subcutaneous", 3.0, 10.0, 1116.0, 0.47, 0.0,
+    assert s.tissue.layers == (Layer("subcutaneous", 3.0, 10.0, 1116.0, 0.47, 0.3,
                                      "subcutaneous"),)
     f.write_text("[mesh]\norder = 4\n")
     with pytest.raises(SceneError, match="choose one of 1, 2"):

@@ -189,14 +189,14 @@ def test_force_errors(motor: dict, field: str, fragment: str) -> None:
 def test_rings_by_name_alias_and_inline() -> None:
     s = scene_from_dict(unit_scene(encapsulation=[
         "A", "Dragon Skin 10",  # aliases
-        {"material": "dragon-skin-30", "loss_factor": 0.1},  # library values, one override
+        {"material": "dragon-skin-30", "loss_factor": 0.05},  # library values, one override
         {"name": "gel", "E_kPa": 30, "density_kg_m3": 980, "nu": 0.45},  # no material
         {"E_kPa": 30.0, "density_kg_m3": 980.0, "nu": 0.45, "loss_factor": 0.2},
     ]))
     a, c, d, gel, unnamed = s.unit.encapsulation
     assert a == library_ring("ecoflex-00-10") and c == library_ring("dragon-skin-10-medium")
     ds30 = MATERIALS["dragon-skin-30"]
-    assert d == Ring("dragon-skin-30", ds30.E_Pa / 1e3, ds30.density_kg_m3, ds30.nu, 0.1,
+    assert d == Ring("dragon-skin-30", ds30.E_Pa / 1e3, ds30.density_kg_m3, ds30.nu, 0.05,
                      "dragon-skin-30")
     assert gel == Ring("gel", 30.0, 980.0, 0.45, 0.0, None)
     assert unnamed.name == "ring4" and unnamed.loss_factor == 0.2
@@ -205,7 +205,7 @@ def test_rings_by_name_alias_and_inline() -> None:
     assert written[:2] == ["ecoflex-00-10", "dragon-skin-10-medium"]
     assert written[2] == {"name": "dragon-skin-30", "material": "dragon-skin-30",
                           "E_kPa": ds30.E_Pa / 1e3, "density_kg_m3": ds30.density_kg_m3,
-                          "nu": ds30.nu, "loss_factor": 0.1}
+                          "nu": ds30.nu, "loss_factor": 0.05}
     assert written[3] == {"name": "gel", "E_kPa": 30.0, "density_kg_m3": 980.0, "nu": 0.45,
                           "loss_factor": 0.0}
     assert_round_trips(s)

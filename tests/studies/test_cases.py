@@ -23,7 +23,9 @@ def test_shipped_scenes_are_the_examples(name):
 def test_edits_set_dotted_paths_and_validate():
     d = cases.scene_dict(cases.triple_case("DCA", cases.contact_edit("bonded")))
     assert d["unit"]["ring_contact"] == "bonded"
-    assert d["unit"]["encapsulation"] == [paper.LETTERS[c] for c in "DCA"]
+    # the paper's model is undamped: each ring is its material with the loss pinned to 0
+    assert d["unit"]["encapsulation"] == [{"material": paper.LETTERS[c], "loss_factor": 0.0}
+                                          for c in "DCA"]
     assert d["output"]["profile_step_mm"] == cases.PROFILE_STEP_MM
     assert d["effects"]["preload"] is True  # pins: report whether they keep contact
     scene_from_dict(d)
