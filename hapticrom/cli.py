@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import traceback
 from collections.abc import Sequence
@@ -62,6 +63,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (FieldError, ValueError, FloatingPointError) as exc:  # bad input, or a model it makes
         print(f"hapticrom {name}: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
+    except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, as cat does
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # so that the final flush does not fail again
+        return EXIT_OK
     except OSError as exc:  # unreadable input file, unwritable output
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"hapticrom {name}: error: {where}{exc.strerror or exc}", file=sys.stderr)

@@ -9,12 +9,31 @@ from collections.abc import Iterator
 from pathlib import Path
 
 
+def check_output_file(option: str, target: str | os.PathLike) -> None:
+    """Raise ValueError naming ``option`` unless ``target`` can be written as a file: its
+    directory exists and it is not itself a directory. Called before any work starts."""
+    path = Path(target)
+    if path.is_dir():
+        raise ValueError(f"{option} {target}: is a directory; give a file name")
+    if not path.resolve().parent.is_dir():
+        raise ValueError(f"{option} {target}: the directory {path.parent} does not exist")
+
+
+def _file_mode() -> int:
+    """The mode a plain ``open(..., "w")`` would give: 0666 less the process umask."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``target`` (same suffix); rename it onto ``target`` when the
-    block succeeds, delete it when the block raises."""
+    block succeeds, delete it when the block raises. The file gets the permissions of a normal
+    write (mkstemp alone would leave it private, 0600)."""
     target = Path(target)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent)
+    os.fchmod(fd, _file_mode())
     os.close(fd)
     tmp_path = Path(tmp)
     try:

@@ -25,6 +25,8 @@ from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, Matern, WhiteKernel
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from surrogate.params import check_choice, check_number
+
 __all__ = ["KERNELS", "GPSurrogateRegressor"]
 
 #: Kernels offered; both export to ONNX (surrogate.export) with a parity test each.
@@ -71,6 +73,7 @@ class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
         self.random_state = random_state
 
     def fit(self, X: Any, y: Any) -> GPSurrogateRegressor:
+        self._check_params()
         X, y = validate_data(self, X, y, dtype=float, multi_output=True, y_numeric=True)
         rng = np.random.default_rng(self.random_state)
         if len(X) > self.max_train:
@@ -90,6 +93,17 @@ class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
         self._y_1d = y.ndim == 1
         self.n_train_ = len(X)
         return self
+
+    def _check_params(self) -> None:
+        check_choice("kernel", self.kernel, KERNELS)
+        check_number("noise", self.noise, 0, 1e3, low_open=True)
+        low, high = self.noise_bounds
+        if not 0 < low <= self.noise <= high:
+            raise ValueError(f"noise_bounds = {self.noise_bounds!r}: allowed 0 < low <= "
+                             f"noise ({self.noise:g}) <= high")
+        check_number("n_restarts_optimizer", self.n_restarts_optimizer, 0, 100, integer=True)
+        check_number("max_train", self.max_train, 2, 20000, integer=True)
+        check_number("random_state", self.random_state, 0, 2**32 - 1, integer=True)
 
     def __sklearn_tags__(self) -> Any:
         tags = super().__sklearn_tags__()

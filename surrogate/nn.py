@@ -20,6 +20,8 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from surrogate.params import check_number
+
 __all__ = ["EnsembleModule", "MLPEnsembleRegressor"]
 
 
@@ -90,6 +92,7 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
         self.random_state = random_state
 
     def fit(self, X: Any, y: Any) -> MLPEnsembleRegressor:
+        self._check_params()
         X, y = validate_data(self, X, y, dtype=float, multi_output=True, y_numeric=True)
         if not np.all(np.isfinite(y)):
             raise ValueError("y contains NaN or infinity")
@@ -112,6 +115,19 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
             torch.set_num_threads(threads)
         self.n_outputs_ = Y.shape[1]
         return self
+
+    def _check_params(self) -> None:
+        hidden = tuple(self.hidden)
+        if not hidden or not all(isinstance(h, int) and h >= 1 for h in hidden):
+            raise ValueError(f"hidden = {self.hidden!r}: allowed one or more integer widths >= 1")
+        check_number("n_members", self.n_members, 1, 256, integer=True)
+        check_number("max_epochs", self.max_epochs, 1, 10**6, integer=True)
+        check_number("patience", self.patience, 1, 10**6, integer=True)
+        check_number("learning_rate", self.learning_rate, 0, 1, low_open=True)
+        check_number("weight_decay", self.weight_decay, 0, 1)
+        check_number("batch_size", self.batch_size, 1, 10**7, integer=True)
+        check_number("val_fraction", self.val_fraction, 0, 0.9)
+        check_number("random_state", self.random_state, 0, 2**32 - 1, integer=True)
 
     def to_module(self, B: np.ndarray | None = None,
                   b: np.ndarray | None = None) -> EnsembleModule:

@@ -26,8 +26,8 @@ from surrogate.runtime.card import CARD_NAME, FORMAT, ModelFileError, read_card,
 __all__ = ["CARD_VERSION", "list_models", "package_versions", "show_model", "write_model"]
 
 CARD_VERSION = 1
-_PACKAGES = ("hapticrom", "numpy", "scikit-learn", "torch", "onnx", "onnxscript", "skl2onnx",
-             "onnxruntime")
+_PACKAGES = ("hapticrom", "numpy", "scipy", "scikit-learn", "torch", "pysindy", "onnx",
+             "onnxscript", "skl2onnx", "onnxruntime")
 
 
 def package_versions() -> dict[str, str]:
@@ -59,6 +59,9 @@ def write_model(out: str | Path, card: Mapping[str, Any], files: Mapping[str, by
     if bad:
         raise ValueError(f"model file name {bad[0]!r} is not allowed")
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; a model directory is not
     try:
         for name, data in files.items():
             (tmp / name).write_bytes(data)

@@ -28,16 +28,9 @@ with negative real parts (checked at load, ``surrogate.runtime.rom.model_from_di
 
 from __future__ import annotations
 
-import argparse
-import datetime as _dt
 import hashlib
 import json
 import math
-import os
-import platform
-import shutil
-import sys
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +39,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from surrogate.registry import package_versions, write_model
+from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
     STATES,
@@ -73,6 +68,7 @@ COMPONENTS = ("r", "z", "theta")
 CONTINUOUS = tuple(d["name"] for d in DESIGN_SPEC["design"] if "choices" not in d)
 EDGE_TRIM_S = 3e-3  # the Hilbert transform is least accurate within ~1 period of the ends
 HOLDOUT_EVERY = 4  # rows with sample_index % 4 == 3 are held out
+COEFFICIENTS_FILE = "coefficients.json"
 MIN_COMPONENT = 1e-3  # a component below this fraction of its point's peak is not modelled
 
 
@@ -389,30 +385,16 @@ def _finite(obj: Any) -> Any:
     return obj
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _versions() -> dict[str, str]:
-    from importlib.metadata import PackageNotFoundError, version
-
-    out = {"python": platform.python_version()}
-    for pkg in ("numpy", "scipy", "pysindy", "scikit-learn", "hapticrom"):
-        try:
-            out[pkg] = version(pkg)
-        except PackageNotFoundError:
-            out[pkg] = "not installed"
-    return out
-
-
 def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-3,
-          seed: int = 0) -> dict[str, Any]:
+          seed: int = 0, overwrite: bool = False) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (every sample with index % 4 != 3), validate on
-    the held-out rows, write ``out`` (card.json + coefficients.json) atomically; returns the
-    card."""
+    the held-out rows, register ``out`` (card.json + coefficients.json, written atomically
+    by :func:`surrogate.registry.write_model`); returns the card."""
     out = Path(out)
-    if out.exists() and any(out.iterdir()):
-        raise ValueError(f"--out: {out} exists and is not empty")
+    if out.exists() and not overwrite:
+        raise FileExistsError(f"{out} exists (pass overwrite / --overwrite to replace it)")
+    if not 0 < threshold < 1:
+        raise ValueError(f"threshold = {threshold!r}: allowed (0, 1)")
     runs, motor, hashes = load_runs(data)
     train_runs = [r for r in runs if r.sample_index % HOLDOUT_EVERY != HOLDOUT_EVERY - 1]
     held = [r for r in runs if r.sample_index % HOLDOUT_EVERY == HOLDOUT_EVERY - 1]
@@ -432,7 +414,6 @@ def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-
                              for b in coefficients["blocks"]}},
                "equations": equations}
     card = {
-        "name": out.name,
         "kind": "rom",
         "predicts": {"center_envelope_um": "vibration envelope at the unit's center "
                      "(skin-side face on the axis), um",
@@ -448,48 +429,15 @@ def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-
                       {"units": name.rsplit("_", 1)[-1], "range": list(rng)})
                for name, rng in model.input_ranges.items()},
         },
+        "coefficients": COEFFICIENTS_FILE,
         "training_data": [{"path": str(p), "manifest_sha256": h}
                           for p, h in zip(data, hashes, strict=True)],
         "split": {"held_out": f"sample_index % {HOLDOUT_EVERY} == {HOLDOUT_EVERY - 1}",
                   "n_train": len(train_runs), "n_held_out": len(held)},
-        "metrics": metrics,
-        "created": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "versions": _versions(),
-        "files": {"coefficients": "coefficients.json"},
+        "training": {"threshold": threshold, "seed": seed},
+        "metrics": _finite(metrics),
+        "versions": package_versions(),
     }
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    try:
-        (tmp / "coefficients.json").write_text(json.dumps(coefficients, indent=1,
-                                                          allow_nan=False) + "\n")
-        card["sha256"] = {"coefficients.json": _sha256(tmp / "coefficients.json")}
-        (tmp / "card.json").write_text(json.dumps(_finite(card), indent=1,
-                                                  allow_nan=False) + "\n")
-        if out.exists():
-            out.rmdir()
-        os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return card
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m surrogate.rom --data DATASET... --out models/NAME``."""
-    p = argparse.ArgumentParser(prog="python -m surrogate.rom", description=__doc__.split(
-        "\n")[0])
-    p.add_argument("--data", nargs="+", required=True, help="transient dataset directories")
-    p.add_argument("--out", required=True, help="model directory to create")
-    p.add_argument("--threshold", type=float, default=1e-3,
-                   help="STLSQ threshold on normalized columns")
-    args = p.parse_args(argv)
-    try:
-        card = train(args.data, args.out, threshold=args.threshold)
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(json.dumps(card["metrics"]["held_out"]["summary"], indent=1))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    body = json.dumps(coefficients, indent=1, allow_nan=False) + "\n"
+    write_model(out, card, {COEFFICIENTS_FILE: body.encode()}, overwrite=overwrite)
+    return read_card(out)

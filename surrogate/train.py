@@ -79,7 +79,9 @@ def _merge_specs(a: list[InputSpec], b: list[InputSpec], where: str) -> list[Inp
 
 def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -> TrainingData:
     """Read the "ok" rows of every dataset (all of the same space inputs and profile grid;
-    numeric ranges are united)."""
+    numeric ranges are united), each dataset in its design-sequence order (``sample_index``;
+    the order of the stored parts depends on which worker finished first), so the held-out
+    split and the first n rows are the same on every machine."""
     from surrogate.data.store import Store
 
     if not paths:
@@ -98,7 +100,10 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -
         elif g.shape != grid.shape or not np.allclose(g, grid):
             raise ValueError(f"{path}: profile grid differs from the first dataset's")
         df = store.read()
-        df = df[df["status"] == "ok"].reset_index(drop=True)
+        df = df[df["status"] == "ok"]
+        if "sample_index" in df:
+            df = df.sort_values("sample_index", kind="stable")
+        df = df.reset_index(drop=True)
         if len(df) == 0:
             raise ValueError(f"{path}: no rows with status 'ok'")
         parts.append(df)

@@ -44,7 +44,7 @@ def load_scene(path: str | Path) -> Scene:
     ``field == "<file>"`` and the line in the message."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as err:
         raise SceneError("<file>", f"{path}: invalid TOML: {err}") from None
     return scene_from_dict(data)

@@ -123,7 +123,7 @@ def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
     kind = ctx["load.kind"]
     if kind not in UNIT_LOAD_KINDS:
         raise SceneError("unit", f'the [unit] table needs load.kind = "unit" or '
-                         f'"normal_actuator" (load.kind is {kind!r}); remove [unit] otherwise')
+                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove [unit] otherwise')
     raw = require_table(raw, "unit", UNIT_KEYS, ctx)
     out = read_fields(raw, UNIT, "unit", ctx)
     out["encapsulation"] = _read_rings(raw.get("encapsulation", []), ctx)
@@ -134,7 +134,7 @@ def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
         out["actuator"] = read_table(raw.get("actuator", {}), ACTUATOR, "unit.actuator", ctx)
     elif "actuator" in raw:
         raise SceneError("unit.actuator", 'unit.actuator is only used with load.kind = '
-                         f'"normal_actuator" (load.kind is {kind!r}); remove it')
+                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove it')
     _check_unit_geometry(build_unit(out), ctx)
     return {key: out[key] for key in UNIT_KEYS if key in out}
 
@@ -193,12 +193,18 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
             if "unit" in d:
                 out[name] = _read_unit(d["unit"], ctx)
             elif ctx["load.kind"] in UNIT_LOAD_KINDS:
-                raise SceneError("unit", f"load.kind = {ctx['load.kind']!r} needs a [unit] "
+                raise SceneError("unit", f"load.kind = {str(ctx['load.kind'])!r} needs a [unit] "
                                  "table (an empty one takes every default)")
             continue
         table = _read_table(name, d.get(name, {}), ctx)
         if table or name != "effects":
             out[name] = table
+    if out["analysis"]["kind"] == "transient" and "unit" not in out:
+        raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
+                         "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
+                         f"\"normal_actuator\" and a [unit] table (load.kind is "
+                         f"{str(ctx['load.kind'])!r}); use \"static\" or \"harmonic\" for "
+                         "a patch or point load")
     return out
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -46,12 +45,11 @@ def _value(text: str) -> Any:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hapticrom.outputs import atomic_path
+    from hapticrom.outputs import atomic_path, check_output_file
     from surrogate.runtime import load_predictor
 
-    if args.json and not Path(args.json).resolve().parent.is_dir():
-        raise ValueError(f"--json {args.json}: the directory {Path(args.json).parent} "
-                         "does not exist")
+    if args.json:
+        check_output_file("--json", args.json)
     p = load_predictor(args.model)
     out = p.predict(_points(args, p.input_names), extrapolate=args.extrapolate)
     n = len(out["center_amplitude_um"])

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from hapticrom.outputs import atomic_path
+from hapticrom.outputs import atomic_path, check_output_file
 
 _OUTPUTS = ("json", "vtk", "plot")
 
@@ -28,9 +28,8 @@ def run(args: argparse.Namespace) -> int:
     from fem.scene import load_scene
 
     for opt in _OUTPUTS:
-        out = getattr(args, opt)
-        if out is not None and not Path(out).resolve().parent.is_dir():
-            raise ValueError(f"--{opt} {out}: the directory {Path(out).parent} does not exist")
+        if getattr(args, opt) is not None:
+            check_output_file(f"--{opt}", getattr(args, opt))
     result = simulate(load_scene(args.scene))
     print(result.summary())
     if args.json:

@@ -2,6 +2,7 @@
 
     hapticrom train --data datasets/default --kind nn --out models/default-nn
     hapticrom train --data datasets/default datasets/lab --kind gp --out models/gp --overwrite
+    hapticrom train --data datasets/transient --kind rom --out models/rom-default
 """
 
 from __future__ import annotations
@@ -12,12 +13,37 @@ import json
 __all__ = ["register"]
 
 
+def _options(text: str | None) -> dict:
+    try:
+        options = json.loads(text) if text else {}
+    except json.JSONDecodeError as err:
+        raise ValueError(f"--options {text!r}: not JSON ({err.msg})") from None
+    if not isinstance(options, dict):
+        raise ValueError(f"--options {text!r}: expected a JSON object")
+    return options
+
+
+def _run_rom(args: argparse.Namespace, options: dict) -> int:
+    from surrogate.rom import train
+
+    unknown = sorted(set(options) - {"threshold"})
+    if unknown:
+        raise ValueError(f"--options: {unknown[0]!r} is not a rom option (allowed: threshold)")
+    card = train(args.data, args.out, seed=args.seed, overwrite=args.overwrite, **options)
+    held = card["metrics"]["held_out"]["summary"]
+    print(f"identified rom on {card['split']['n_train']} runs, held out "
+          f"{card['split']['n_held_out']}")
+    print("  " + "  ".join(f"{k} {v:.4g}" for k, v in held.items() if v is not None))
+    print(f"wrote {args.out}")
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
+    options = _options(args.options)
+    if args.kind == "rom":
+        return _run_rom(args, options)
     from surrogate.train import train
 
-    options = json.loads(args.options) if args.options else {}
-    if not isinstance(options, dict):
-        raise ValueError(f"--options {args.options!r}: expected a JSON object")
     card = train(args.data, args.kind, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
                  options=options)
@@ -33,10 +59,11 @@ def _run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``train`` subcommand."""
-    p = subparsers.add_parser("train", help="train a surrogate (gp or nn) on datasets")
+    p = subparsers.add_parser("train", help="train a surrogate (gp, nn or transient rom)")
     p.add_argument("--data", nargs="+", required=True, metavar="DATASET",
                    help="one or more dataset directories (same space inputs)")
-    p.add_argument("--kind", required=True, choices=("gp", "nn"), help="model kind")
+    p.add_argument("--kind", required=True, choices=("gp", "nn", "rom"),
+                   help="model kind: gp, nn (harmonic amplitudes), rom (transient envelope)")
     p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing model")
     p.add_argument("--test-fraction", type=float, default=0.2,

@@ -241,16 +241,25 @@ def _write(out: Path, store: Store | None, space: Space, rows: list[dict[str, An
     return IngestReport(out, source, n_read, len(fresh), len(rows) - len(fresh))
 
 
-def _float_or_none(raw: str | None, where: str, column: str, lo: float = 0.0) -> float | None:
+def _float_or_none(raw: str | None, where: str, column: str, lo: float = 0.0,
+                   low_open: bool = False) -> float | None:
+    """The cell as a float >= lo (> lo with ``low_open``), None when empty."""
     if raw is None or raw.strip() == "":
         return None
     try:
         value = float(raw)
     except ValueError:
         raise DatasetError(column, f"{where}: {column} = {raw!r} is not a number") from None
-    if not math.isfinite(value) or value < lo:
-        raise DatasetError(column, f"{where}: {column} = {raw!r}: need a finite value >= {lo}")
+    if not math.isfinite(value) or value < lo or (low_open and value == lo):
+        need = f"> {lo:g}" if low_open else f">= {lo:g}"
+        raise DatasetError(column, f"{where}: {column} = {raw!r}: need a finite value {need}")
     return value
+
+
+def _amplitude(raw: str | None, where: str, column: str) -> float | None:
+    """An amplitude or amplitude ratio: strictly positive (the models learn its logarithm, and
+    a zero center amplitude has no normalized edge)."""
+    return _float_or_none(raw, where, column, 0.0, low_open=True)
 
 
 # --------------------------------------------------------------------------- public API
@@ -272,7 +281,7 @@ def ingest_profile(path: str | Path, out: str | Path, values: Mapping[str, Any],
     sid, scene_json = _scene_row(space, vals, where)
     center = None
     if center_amplitude_um is not None:
-        center = _float_or_none(str(center_amplitude_um), where, "center_amplitude_um")
+        center = _amplitude(str(center_amplitude_um), where, "center_amplitude_um")
     edge = _edge_from_profile(dist, amp)
     src = f"ingest:{source or path.name}"
     row = {**vals, **_amplitudes(center, edge, None, where), "sample_id": sid,
@@ -283,7 +292,7 @@ def ingest_profile(path: str | Path, out: str | Path, values: Mapping[str, Any],
 
 def _amplitudes(center: float | None, edge: float | None, norm: float | None,
                 where: str) -> dict[str, Any]:
-    if center is not None and edge is not None and center > 0:
+    if center is not None and edge is not None:
         ratio = edge / center
         if norm is not None and not math.isclose(norm, ratio, rel_tol=1e-3, abs_tol=1e-9):
             raise DatasetError("normalized_edge", f"{where}: normalized_edge = {norm!r} but "
@@ -362,9 +371,9 @@ def _table_row(space: Space, rec: Mapping[str, Any], path: Path, where: str,
                profile_opts: tuple[Any, Any, tuple[int, int]]) -> dict[str, Any]:
     vals = _check_values(space, {k: v for k, v in rec.items() if k in space.names}, where)
     sid, scene_json = _scene_row(space, vals, where)
-    center = _float_or_none(rec.get("center_amplitude_um"), where, "center_amplitude_um")
-    edge = _float_or_none(rec.get("edge_amplitude_um"), where, "edge_amplitude_um")
-    norm = _float_or_none(rec.get("normalized_edge"), where, "normalized_edge")
+    center = _amplitude(rec.get("center_amplitude_um"), where, "center_amplitude_um")
+    edge = _amplitude(rec.get("edge_amplitude_um"), where, "edge_amplitude_um")
+    norm = _amplitude(rec.get("normalized_edge"), where, "normalized_edge")
     row: dict[str, Any] = {**vals, "sample_id": sid, "scene_json": scene_json,
                            "wall_s": _float_or_none(rec.get("wall_s"), where, "wall_s")}
     dofs = _float_or_none(rec.get("dofs"), where, "dofs", lo=1.0)

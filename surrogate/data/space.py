@@ -291,7 +291,7 @@ def _read_base(d: Mapping[str, Any], head: Mapping[str, Any],
     if not path.is_absolute():
         path = Path(base_dir or ".") / path
     try:
-        scene = tomllib.loads(path.read_text(encoding="utf-8"))
+        scene = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except (OSError, tomllib.TOMLDecodeError) as err:
         raise SpaceError("space.base_scene", f"space.base_scene = {str(path)!r}: cannot read "
                          f"it: {err}") from None
@@ -367,7 +367,7 @@ def load_space(path: str | Path, check_scenes: bool = True) -> Space:
     """Read a space TOML file (see module docstring). Raises :class:`SpaceError`."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except OSError as err:
         raise SpaceError("<file>", f"cannot read space file {str(path)!r}: {err}") from None
     try:

@@ -32,7 +32,6 @@ largest trained envelope) stops with :class:`RomBlowUpError` naming the time.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from collections.abc import Mapping
@@ -42,6 +41,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from surrogate.runtime.card import read_card
 
 __all__ = [
     "FORMAT",
@@ -389,15 +390,13 @@ def design_grid(model: EnvelopeModel) -> NDArray:
 
 
 def load_envelope_model(path: str | Path) -> EnvelopeModel:
-    """Load a ROM from a ``models/NAME/`` directory (``card.json`` naming the coefficients
-    file; the sha256 of every file listed in the card is verified) or a coefficients JSON."""
+    """Load a ROM from a ``models/NAME/`` directory (its card names the coefficients file;
+    every file's sha256 is verified, :func:`surrogate.runtime.card.read_card`) or from a
+    coefficients JSON file."""
     p = Path(path)
     if p.is_dir():
-        card = json.loads((p / "card.json").read_text())
-        for name, digest in card["sha256"].items():
-            actual = hashlib.sha256((p / name).read_bytes()).hexdigest()
-            if actual != digest:
-                raise ValueError(f"sha256: {p / name} does not match card.json (expected "
-                                 f"{digest[:12]}, got {actual[:12]}): the file was altered")
-        p = p / card["files"]["coefficients"]
+        card = read_card(p)
+        if card.get("kind") != "rom":
+            raise ValueError(f"{p}: a {card.get('kind')!r} model, not a transient ROM")
+        p = p / card["coefficients"]
     return model_from_dict(json.loads(p.read_text()))

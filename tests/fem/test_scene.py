@@ -135,7 +135,8 @@ def test_to_dict_is_toml_shaped_and_complete() -> None:
 def test_transient_analysis_round_trip() -> None:
     d = {"analysis": {"kind": "transient", "time_step_ms": 0.1, "duration_ms": 50,
                       "rho_inf": 0, "voltage_schedule": [[0, 3], [10.5, -3.3], [20, 0]]},
-         "output": {"history_every": 7, "profile_step_mm": 4, "profile_length_mm": 20}}
+         "output": {"history_every": 7, "profile_step_mm": 4, "profile_length_mm": 20},
+         "load": {"kind": "unit"}, "unit": {}}  # a transient drives a unit
     s = scene_from_dict(d)
     a = s.analysis
     assert a.voltage_schedule == ((0.0, 3.0), (10.5, -3.3), (20.0, 0.0))
@@ -151,10 +152,12 @@ def test_transient_analysis_round_trip() -> None:
     assert "voltage_schedule = [[0.0, 3.0], [10.5, -3.3], [20.0, 0.0]]" in dump_scene_toml(s)
     assert_round_trips(s)
     # a directly built analysis with lists is stored hashable, and validated
-    direct = Scene(s.tissue, analysis=Analysis("transient", voltage_schedule=[[0, 1], [5, 2]]))
+    direct = Scene(s.tissue, load=s.load, unit=s.unit,
+                   analysis=Analysis("transient", voltage_schedule=[[0, 1], [5, 2]]))
     assert direct.analysis.voltage_schedule == ((0, 1), (5, 2))
     assert scene_hash(direct) == scene_hash(scene_from_dict(
-        {"analysis": {"kind": "transient", "voltage_schedule": [[0.0, 1.0], [5.0, 2.0]]}}))
+        {"analysis": {"kind": "transient", "voltage_schedule": [[0.0, 1.0], [5.0, 2.0]]},
+         "load": {"kind": "unit"}, "unit": {}}))
     with pytest.raises(SceneError) as info:
         Scene(s.tissue, analysis=Analysis(voltage_schedule=((1.0, 3.3),)))
     assert info.value.field == "analysis.voltage_schedule[0][0]"
@@ -231,7 +234,8 @@ schedules = st.lists(
 @settings(max_examples=100, deadline=None)
 @given(schedules)
 def test_random_schedules_round_trip(schedule: list[list[float]]) -> None:
-    s = scene_from_dict({"analysis": {"kind": "transient", "voltage_schedule": schedule}})
+    s = scene_from_dict({"analysis": {"kind": "transient", "voltage_schedule": schedule},
+                         "load": {"kind": "unit"}, "unit": {}})
     assert s.analysis.voltage_schedule == tuple((float(t), float(v)) for t, v in schedule)
     assert_round_trips(s)
 

@@ -35,8 +35,10 @@ def synthetic_amplitudes(orientation: np.ndarray, n_rings: np.ndarray, E_kPa: np
     return center, profile
 
 
-def make_dataset(path, n: int, start: int = 0):
-    """Write a synthetic dataset of ``n`` Sobol points at ``path``; returns the path."""
+def make_dataset(path, n: int, start: int = 0, reverse: bool = False):
+    """Write a synthetic dataset of ``n`` Sobol points at ``path``; returns the path.
+    ``reverse`` stores the rows last first, one part per row (as workers finishing out of
+    order would)."""
     from surrogate.data.space import space_from_dict
     from surrogate.data.store import Store
 
@@ -56,5 +58,9 @@ def make_dataset(path, n: int, start: int = 0):
                      "profile_distance_mm": GRID_MM.tolist(),
                      "profile_magnitude_um": profile[i].tolist()})
     with store.lock():
-        store.write_part(rows)
+        if reverse:
+            for row in reversed(rows):
+                store.write_part([row])
+        else:
+            store.write_part(rows)
     return path

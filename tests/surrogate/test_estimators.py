@@ -109,3 +109,21 @@ def test_nn_is_seeded():
     a = MLPEnsembleRegressor(max_epochs=10, n_members=2, hidden=(8,), random_state=4).fit(X, Y)
     b = MLPEnsembleRegressor(max_epochs=10, n_members=2, hidden=(8,), random_state=4).fit(X, Y)
     np.testing.assert_array_equal(a.predict(Xt), b.predict(Xt))
+
+
+@pytest.mark.parametrize("estimator, param, value, message", [
+    (MLPEnsembleRegressor, "hidden", (0, 4), "hidden = (0, 4): allowed one or more"),
+    (MLPEnsembleRegressor, "n_members", 0, "n_members = 0: allowed [1, 256]"),
+    (MLPEnsembleRegressor, "learning_rate", 0.0, "learning_rate = 0.0: allowed (0, 1]"),
+    (MLPEnsembleRegressor, "val_fraction", 0.95, "val_fraction = 0.95: allowed [0, 0.9]"),
+    (MLPEnsembleRegressor, "batch_size", 2.5, "batch_size = 2.5: must be an integer"),
+    (GPSurrogateRegressor, "kernel", "cubic", "kernel = 'cubic': allowed 'rbf', 'matern52'"),
+    (GPSurrogateRegressor, "max_train", 1, "max_train = 1: allowed [2, 20000]"),
+    (GPSurrogateRegressor, "noise", float("nan"), "noise = nan: must be a number"),
+    (GPSurrogateRegressor, "noise_bounds", (1e-1, 1.0), "noise_bounds = (0.1, 1.0): allowed"),
+])
+def test_bad_parameters_name_the_parameter_and_its_range(estimator, param, value, message):
+    X = np.random.default_rng(0).random((30, 2))
+    with pytest.raises(ValueError) as info:
+        estimator(**{param: value}).fit(X, X.sum(axis=1))
+    assert message in str(info.value)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
     MotorConstants,
@@ -268,3 +269,20 @@ def test_identification_recovers_a_known_mode():
         scale = 1.0 if blk["component"] == "r" else 1j
         assert complex(*blk["b0"]) == pytest.approx(b * scale, rel=0.03)
         assert math.isfinite(blk["relative_spread"])
+
+
+def test_train_kind_rom_registers_a_verified_model(tmp_path, capsys):
+    from hapticrom.cli import main
+
+    out = tmp_path / "rom"
+    assert main(["train", "--data", str(DATASET), "--kind", "rom", "--out", str(out)]) == 0
+    card = read_card(out)  # hashes verified like every model
+    assert card["kind"] == "rom" and list(card["files"]) == ["coefficients.json"]
+    model = load_envelope_model(out)
+    assert model.spec == load_envelope_model(SHIPPED).spec
+    assert main(["train", "--data", str(DATASET), "--kind", "rom", "--out", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err
+    assert main(["train", "--data", str(DATASET), "--kind", "rom", "--out", str(tmp_path / "x"),
+                 "--options", '{"threshold": 2}']) == 2
+    assert "threshold = 2: allowed (0, 1)" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()

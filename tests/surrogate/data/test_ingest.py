@@ -181,7 +181,9 @@ def test_table_ingest_round_trip_and_idempotence(tmp_path: Path) -> None:
     ("25,245,fixed,1,1", r"violates constraint 'stiff_fast'"),
     ("49,abc,fixed,1,1", r"frequency_hz = 'abc': expected a float64"),
     ("49,120,fixed,,", r"no result: give center_amplitude_um"),
-    ("49,120,fixed,-1,1", r"center_amplitude_um = '-1': need a finite value >= 0"),
+    ("49,120,fixed,-1,1", r"center_amplitude_um = '-1': need a finite value > 0"),
+    ("49,120,fixed,0,1", r"center_amplitude_um = '0': need a finite value > 0"),
+    ("49,120,fixed,1,0", r"edge_amplitude_um = '0': need a finite value > 0"),
 ])
 def test_table_values_are_validated_and_nothing_written(tmp_path: Path, row: str,
                                                         message: str) -> None:
