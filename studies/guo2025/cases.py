@@ -95,6 +95,13 @@ def scene_dict(case: Case, scenes_dir: Path = SCENES_DIR) -> dict:
     return d
 
 
+def case_scene(case: Case, scenes_dir: Path = SCENES_DIR):
+    """The validated scene ``case`` solves (what the report describes)."""
+    from fem.scene import scene_from_dict
+
+    return scene_from_dict(scene_dict(case, scenes_dir))
+
+
 def _undamped(d: dict) -> None:
     """Loss factor 0 on every tissue layer and ring of the scene dict ``d`` (in place)."""
     for layer in d["tissue"]["layer"]:

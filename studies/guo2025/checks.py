@@ -17,7 +17,9 @@ from .cases import (
     TRANSIENT_CONTACT,
     TRIPLE,
     Context,
+    case_scene,
     contact_name,
+    transient_case,
 )
 from .paper import (
     LDV_BAND_HZ,
@@ -195,7 +197,7 @@ def check_transient(r: Mapping[str, Solved], ctx: Context) -> Section | None:
                 t["centre_band_um"], t["edge_band_um"], t["edge_z_band_um"])]
     drift = t["centre_drift_um"] / h.centre_um
     literal = ctx.posed["none"]["transient"]
-    scene = ctx.example(TRIPLE)
+    scene = case_scene(transient_case())  # the scene the transient solves
     damped = ("undamped" if all(ly.loss_factor == 0 for ly in scene.tissue.layers)
               else "hysteretically damped")
     rev_hz = scene.unit.motor.rated_frequency_hz

@@ -8,7 +8,7 @@ from typing import Any
 
 from fem import SOLVER_VERSION
 
-from .cases import RING_CONTACTS, TRIPLE, Context, is_posed, refused_kinds
+from .cases import RING_CONTACTS, TRIPLE, Case, Context, case_scene, is_posed, refused_kinds
 from .contact import CONTACT_DEFS, closest_text
 from .paper import LETTERS, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
 from .run import Solved
@@ -24,7 +24,7 @@ def _model_text(r: Mapping[str, Solved], ctx: Context) -> str:
     scene, default = ctx.example(TRIPLE), ctx.default
     t, u, mesh = scene.tissue, scene.unit, scene.mesh
     m, pg, b = u.motor, u.pogo, u.board
-    layers = t.layers
+    layers = case_scene(Case(TRIPLE)).tissue.layers  # what the cases solve, not the example
     damping = ("no damping" if all(ly.loss_factor == 0 for ly in layers)
                else "loss factors " + ", ".join(f"{ly.loss_factor:g}" for ly in layers))
     forearm = ", ".join(f"{ly.name} {ly.thickness_mm:g} mm / {ly.E_kPa:g} kPa" for ly in layers)

@@ -24,13 +24,15 @@ encode identically by construction.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["InputSpec", "PredictorInputError", "encode", "n_features", "parse_inputs"]
+__all__ = ["InputSpec", "PredictorInputError", "compile_specs", "encode", "n_features",
+           "parse_inputs"]
 
 INPUT_TYPES = ("continuous", "integer", "categorical")
 CATEGORICAL_ENCODINGS = ("onehot", "ordinal")
@@ -187,15 +189,86 @@ def _as_codes(X: Any, specs: Sequence[InputSpec]) -> np.ndarray:
     return arr
 
 
-def parse_inputs(X: Any, specs: Sequence[InputSpec], *,
-                 extrapolate: bool = False) -> tuple[np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class _Plan:
+    """The specs as arrays, so that a batch is checked and encoded in a few numpy operations
+    (one Python step per input would cost more than the ONNX graph at batch 1)."""
+
+    lo: np.ndarray  # (d,) range of each input's code
+    hi: np.ndarray
+    integral: np.ndarray  # (d,) bool: categorical or integer
+    positive: np.ndarray  # (d,) bool: log scale, must be > 0
+    categorical: np.ndarray  # (d,) bool: never extrapolated
+    source: np.ndarray  # (F,) input column of each feature
+    onehot: np.ndarray  # (F,) category index of a one-hot feature, -1 otherwise
+    log: np.ndarray  # (F,) bool: log of the code before scaling
+    offset: np.ndarray  # (F,) feature = (code' - offset) / span: exactly 0 and 1 at the ends
+    span: np.ndarray
+    gate: np.ndarray  # (F,) column of the controlling input, -1 when always used
+    gate_min: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(specs: tuple[InputSpec, ...]) -> _Plan:
+    index = {s.name: j for j, s in enumerate(specs)}
+    lo = np.array([s.range[0] for s in specs], dtype=float)
+    hi = np.array([s.range[1] for s in specs], dtype=float)
+    src, onehot, log, offset, span, gate, gate_min = [], [], [], [], [], [], []
+    for j, spec in enumerate(specs):
+        if spec.type == "categorical" and spec.encoding == "onehot":
+            for c in range(len(spec.choices)):
+                src.append(j), onehot.append(c), log.append(False)
+                offset.append(0.0), span.append(1.0), gate.append(-1), gate_min.append(0.0)
+            continue
+        if spec.type == "categorical":  # ordinal code scaled to [0, 1]
+            a, b = 0.0, float(max(len(spec.choices) - 1, 1))
+        else:
+            a, b = float(spec.low), float(spec.high)  # type: ignore[arg-type]
+            if spec.scale == "log":
+                a, b = np.log(a), np.log(b)
+        src.append(j), onehot.append(-1), log.append(spec.scale == "log")
+        offset.append(a), span.append(b - a)
+        control, minimum = spec.used_when if spec.used_when is not None else (None, 0.0)
+        gate.append(index[control] if control is not None else -1), gate_min.append(minimum)
+    integral = np.array([s.type in ("categorical", "integer") for s in specs], dtype=bool)
+    positive = np.array([s.type == "continuous" and s.scale == "log" for s in specs], dtype=bool)
+    categorical = np.array([s.type == "categorical" for s in specs], dtype=bool)
+    return _Plan(lo, hi, integral, positive, categorical, np.array(src, dtype=int),
+                 np.array(onehot),
+                 np.array(log, dtype=bool), np.array(offset), np.array(span),
+                 np.array(gate, dtype=int), np.array(gate_min, dtype=float))
+
+
+def compile_specs(specs: Sequence[InputSpec]) -> _Plan:
+    """The array form of ``specs`` that :func:`parse_inputs` and :func:`encode` use; a caller
+    that encodes often (the run-time predictor) builds it once and passes it as ``plan``."""
+    return _plan(tuple(specs))
+
+
+def parse_inputs(X: Any, specs: Sequence[InputSpec], *, extrapolate: bool = False,
+                 plan: _Plan | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Validate design points; return (codes (n, d) float64, extrapolated (n,) bool).
 
     Raises :class:`PredictorInputError` naming the input for NaN/inf, an unknown choice, a
     non-integral integer or categorical index, and -- unless ``extrapolate`` -- a value outside
     the trained range. Categoricals and integers never extrapolate beyond their choices."""
     codes = _as_codes(X, specs)
-    outside = np.zeros(codes.shape[0], dtype=bool)
+    plan = plan or _plan(tuple(specs))
+    with np.errstate(invalid="ignore"):
+        finite = np.isfinite(codes)
+        whole = ~plan.integral | (codes == np.round(codes))
+        outside_cell = (codes < plan.lo) | (codes > plan.hi)
+        bad_log = plan.positive & (codes <= 0)
+    if finite.all() and whole.all() and not bad_log.any() and (
+            not outside_cell.any() or (extrapolate and not outside_cell[:, plan.categorical]
+                                       .any())):
+        return codes, outside_cell.any(axis=1)
+    _raise_first_error(codes, specs, extrapolate)
+    raise AssertionError("unreachable: a bad cell was found but not explained")
+
+
+def _raise_first_error(codes: np.ndarray, specs: Sequence[InputSpec], extrapolate: bool) -> None:
+    """Raise the message for the first bad input (in input order)."""
     for j, spec in enumerate(specs):
         col = codes[:, j]
         bad = ~np.isfinite(col)
@@ -218,32 +291,18 @@ def parse_inputs(X: Any, specs: Sequence[InputSpec], *,
                                       f"the trained range: {spec.allowed()}{hint}")
         if spec.type == "continuous" and spec.scale == "log" and (col <= 0).any():
             raise PredictorInputError(spec.name, f"{spec.name}: a log-scale input must be > 0")
-        outside |= out
-    return codes, outside
 
 
-def encode(codes: np.ndarray, specs: Sequence[InputSpec]) -> np.ndarray:
+def encode(codes: np.ndarray, specs: Sequence[InputSpec], *,
+           plan: _Plan | None = None) -> np.ndarray:
     """Feature matrix (n, n_features(specs)) float64 of validated codes (see module doc)."""
     codes = np.asarray(codes, dtype=float)
-    index = {s.name: j for j, s in enumerate(specs)}
-    blocks = []
-    for j, spec in enumerate(specs):
-        col = codes[:, j]
-        if spec.type == "categorical":
-            k = len(spec.choices)
-            if spec.encoding == "onehot":
-                blocks.append((col[:, None] == np.arange(k)[None, :]).astype(float))
-            else:
-                blocks.append((col / max(k - 1, 1))[:, None])
-            continue
-        lo, hi = float(spec.low), float(spec.high)  # type: ignore[arg-type]
-        if spec.scale == "log":
-            col, lo, hi = np.log(col), np.log(lo), np.log(hi)
-        feature = (col - lo) / (hi - lo)
-        if spec.used_when is not None:
-            control, minimum = spec.used_when
-            feature = np.where(codes[:, index[control]] >= minimum, feature, 0.0)
-        blocks.append(feature[:, None])
-    if not blocks:
-        return np.zeros((codes.shape[0], 0))
-    return np.concatenate(blocks, axis=1)
+    plan = plan or _plan(tuple(specs))
+    raw = codes[:, plan.source]
+    with np.errstate(divide="ignore", invalid="ignore"):  # log of a one-hot code: unused
+        scaled = (np.where(plan.log, np.log(raw), raw) - plan.offset) / plan.span
+    gated = plan.gate >= 0
+    if gated.any():
+        used = codes[:, np.where(gated, plan.gate, 0)] >= plan.gate_min
+        scaled = np.where(gated & ~used, 0.0, scaled)
+    return np.where(plan.onehot >= 0, (raw == plan.onehot).astype(float), scaled)

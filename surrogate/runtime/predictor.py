@@ -23,7 +23,13 @@ import numpy as np
 import onnxruntime as ort
 
 from surrogate.runtime.card import ModelFileError, read_card
-from surrogate.runtime.encoding import InputSpec, PredictorInputError, encode, parse_inputs
+from surrogate.runtime.encoding import (
+    InputSpec,
+    PredictorInputError,
+    compile_specs,
+    encode,
+    parse_inputs,
+)
 
 __all__ = ["ModelFileError", "Predictor", "PredictorInputError", "load_predictor",
            "make_session"]
@@ -88,12 +94,13 @@ class Predictor:
         self.session = session
         self._dtype = _DTYPES[card["graph"]["dtype"]]
         self._edge = EdgeRadius(card["edge_radius"], self.specs)
+        self._plan = compile_specs(self.specs)
 
     def features(self, X: Any, *, extrapolate: bool = False) -> tuple[np.ndarray, np.ndarray,
                                                                        np.ndarray]:
         """(codes, encoded features in the graph's dtype, extrapolated mask)."""
-        codes, outside = parse_inputs(X, self.specs, extrapolate=extrapolate)
-        return codes, encode(codes, self.specs).astype(self._dtype), outside
+        codes, outside = parse_inputs(X, self.specs, extrapolate=extrapolate, plan=self._plan)
+        return codes, encode(codes, self.specs, plan=self._plan).astype(self._dtype), outside
 
     def predict(self, X: Any, *, extrapolate: bool = False) -> dict[str, np.ndarray]:
         """Predict every output for design points ``X`` (see the module docstring)."""
