@@ -111,9 +111,19 @@ def list_models(root: str | Path = "models") -> list[dict[str, Any]]:
         except ModelFileError as err:
             rows.append({"name": d.name, "status": str(err)})
             continue
-        metrics = card.get("metrics", {})
         rows.append({"name": d.name, "kind": card.get("kind"), "created": card.get("created"),
-                     "status": "ok",
-                     "center_median_rel_err": metrics.get("center_amplitude_um", {})
-                     .get("median_rel_err")})
+                     "status": "ok", "headline": headline_metric(card)})
     return rows
+
+
+def headline_metric(card: Mapping[str, Any]) -> str:
+    """One line of held-out accuracy for listings: the center amplitude's median relative
+    error (gp, nn) or the center envelope's median NRMSE (rom); empty when the card has none."""
+    metrics = card.get("metrics", {})
+    err = metrics.get("center_amplitude_um", {}).get("median_rel_err")
+    if err is not None:
+        return f"center median rel. err. {100 * err:.2f} % (held out)"
+    nrmse = metrics.get("held_out", {}).get("summary", {}).get("center_nrmse_median")
+    if nrmse is not None:
+        return f"center envelope median NRMSE {100 * nrmse:.1f} % (held out)"
+    return ""

@@ -19,10 +19,8 @@ def _list(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no models under {args.root}")
     for r in rows:
-        err = r.get("center_median_rel_err")
-        tail = f"center median rel. err. {100 * err:.2f} %" if err is not None else ""
         print(f"{r['name']:24s} {r.get('kind') or '-':4s} {r.get('created') or '-':26s} "
-              f"{r['status'] if r['status'] != 'ok' else tail}")
+              f"{r['status'] if r['status'] != 'ok' else r['headline']}")
     return 0 if all(r["status"] == "ok" for r in rows) else 1
 
 

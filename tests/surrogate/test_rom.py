@@ -280,6 +280,10 @@ def test_train_kind_rom_registers_a_verified_model(tmp_path, capsys):
     assert card["kind"] == "rom" and list(card["files"]) == ["coefficients.json"]
     model = load_envelope_model(out)
     assert model.spec == load_envelope_model(SHIPPED).spec
+    from surrogate.registry import list_models
+
+    [row] = list_models(tmp_path)
+    assert row["status"] == "ok" and "center envelope median NRMSE" in row["headline"]
     assert main(["train", "--data", str(DATASET), "--kind", "rom", "--out", str(out)]) == 2
     assert "exists" in capsys.readouterr().err
     assert main(["train", "--data", str(DATASET), "--kind", "rom", "--out", str(tmp_path / "x"),
