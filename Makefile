@@ -25,6 +25,7 @@ demo: $(STAMP)
 	$(BIN)/hapticrom models list --root models
 	$(BIN)/hapticrom predict models/nn-default --csv examples/designs.csv --json out/designs-nn.json
 	$(BIN)/python examples/surrogate_vs_fe.py
+	$(BIN)/hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
 
 test: $(STAMP)
 	$(BIN)/ruff check .
@@ -43,6 +44,8 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_effects.py
 	$(BIN)/python bench/bench_absorber.py
 	$(BIN)/python bench/bench_generate.py
+	$(BIN)/python bench/bench_surrogate.py
+	$(BIN)/python bench/bench_plan.py
 
 clean:
 	rm -rf $(VENV) out

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import SOLVER_VERSION, results, transient_analysis
+from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .domain import Domain
 from .haptic_unit import pin_contact_check
 from .problem import (
@@ -144,9 +145,14 @@ class SimulationResult:
         return "\n".join(lines)
 
 
-def simulate(scene: Scene) -> SimulationResult:
-    """Solve a scene and sample the skin surface."""
+def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> SimulationResult:
+    """Solve a scene and sample the skin surface.
+
+    The size is estimated first (:func:`fem.cost.check_cost`): a scene above ``max_unknowns``
+    is refused with a :class:`fem.scene.SceneError` naming the fields that drive its size,
+    before anything is allocated. Pass a larger ``max_unknowns`` (``math.inf``) to run it."""
     t0 = time.perf_counter()
+    check_cost(scene, max_unknowns)
     problem = build_problem(scene)
     log = OperatorLog()
     edge = problem.edge

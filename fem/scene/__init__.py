@@ -62,6 +62,7 @@ from .model import (
 )
 from .tables import DEFAULT_FOREARM_LAYERS, MAX_LAYERS, MAX_RINGS
 from .unit_model import RING_GAP_MM, Actuator, Board, Motor, Pogo, Ring, Unit
+from .usage import effective_scene_dict, unused_fields
 
 __all__ = [
     "DEFAULT_FOREARM_LAYERS",
@@ -87,8 +88,10 @@ __all__ = [
     "Tissue",
     "Unit",
     "dump_scene_toml",
+    "effective_scene_dict",
     "load_scene",
     "scene_from_dict",
     "scene_hash",
     "scene_to_dict",
+    "unused_fields",
 ]

@@ -56,7 +56,7 @@ DEFAULT_FOREARM_LAYERS: tuple[Layer, ...] = tuple(
 LAYER = _from_model(Layer, {
     "name": Spec(str, None),  # default: the material name, else "layer<i>"
     "material": Spec(str, None),  # library name; explicit fields below override it
-    "thickness_mm": Spec(float, REQUIRED, "(0, 10000]"),
+    "thickness_mm": Spec(float, REQUIRED, "[0.001, 10000]"),  # 1 um: below, cells are slivers
     "E_kPa": Spec(float, REQUIRED, "(0, 1e9]", missing_hint=FROM_MATERIAL),
     "density_kg_m3": Spec(float, REQUIRED, "(0, 1e5]", missing_hint=FROM_MATERIAL),
     "nu": Spec(float, REQUIRED, "[0, 0.5)", missing_hint=FROM_MATERIAL),
@@ -65,8 +65,8 @@ LAYER = _from_model(Layer, {
 RING = {key: spec for key, spec in LAYER.items() if key != "thickness_mm"}  # name: "ring<i>"
 
 MOTOR = _from_model(Motor, {
-    "diameter_mm": Spec(float, MODEL, "(0, 100]"),
-    "height_mm": Spec(float, MODEL, "(0, 50]"),
+    "diameter_mm": Spec(float, MODEL, "[0.001, 100]"),  # lengths >= 1 um: no sliver cells
+    "height_mm": Spec(float, MODEL, "[0.001, 50]"),
     "mass_g": Spec(float, MODEL, "(0, 1000]"),
     "unbalance_g_mm": Spec(float, MODEL, "(0, 1000]"),
     "force_N": Spec(float, None, "(0, 1e3]", input_only=True),  # -> unbalance_g_mm
@@ -81,8 +81,8 @@ MOTOR = _from_model(Motor, {
     "tau_spindown_ms": Spec(float, MODEL, "(0, 1e4]"),
 })
 BOARD = _from_model(Board, {
-    "thickness_mm": Spec(float, MODEL, "[0, 10]"),
-    "diameter_mm": Spec(float, MODEL, "(0, 100]"),
+    "thickness_mm": Spec(float, MODEL, "[0, 10]"),  # 0: no board; else >= 1 um (unit checks)
+    "diameter_mm": Spec(float, MODEL, "[0.001, 100]"),
     "material": Spec(str, MODEL),  # library name; the three keys below default to its values
     "E_kPa": Spec(float, REQUIRED, "(0, 1e9]", missing_hint=FROM_MATERIAL),
     "density_kg_m3": Spec(float, REQUIRED, "(0, 1e5]", missing_hint=FROM_MATERIAL),
@@ -90,11 +90,11 @@ BOARD = _from_model(Board, {
 })
 POGO = _from_model(Pogo, {
     "count": Spec(int, MODEL, "[1, 64]"),
-    "radius_mm": Spec(float, MODEL, "(0, 50]"),
+    "radius_mm": Spec(float, MODEL, "[0.001, 50]"),
     "stiffness_N_m": Spec(float, MODEL, "(0, 1e9]"),
-    "length_mm": Spec(float, MODEL, "(0, 50]"),
+    "length_mm": Spec(float, MODEL, "[0.001, 50]"),
     "travel_mm": Spec(float, MODEL, "[0, unit.pogo.length_mm)"),
-    "tip_diameter_mm": Spec(float, MODEL, "(0, 5]"),
+    "tip_diameter_mm": Spec(float, MODEL, "[0.001, 5]"),
 })
 ACTUATOR = _from_model(Actuator, {"force_N": Spec(float, MODEL, "[-1e3, 1e3]", nonzero=True)})
 
@@ -102,7 +102,7 @@ ACTUATOR = _from_model(Actuator, {"force_N": Spec(float, MODEL, "[-1e3, 1e3]", n
 UNIT = _from_model(Unit, {
     "orientation": Spec(str, MODEL, choices=("forward", "reverse")),
     "attachment": Spec(str, MODEL, choices=("glued", "pogo")),
-    "ring_thickness_mm": Spec(float, MODEL, "(0, 20]"),
+    "ring_thickness_mm": Spec(float, MODEL, "[0.001, 20]"),
     "ring_contact": Spec(str, MODEL, choices=("frictionless", "bonded", "none")),
 })
 UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
@@ -118,14 +118,14 @@ UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", 
 # the [unit] checks need tissue.radius_mm and load.kind.
 _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
     "tissue": (Tissue, {
-        "radius_mm": Spec(float, MODEL, "(0, 1e5]"),
+        "radius_mm": Spec(float, MODEL, "[0.001, 1e5]"),
         "side": Spec(str, MODEL, choices=("absorbing", "fixed", "free")),
         "base": Spec(str, MODEL, choices=("fixed", "absorbing")),
     }),
     "load": (Load, {
         "kind": Spec(str, MODEL, choices=tuple(kind.value for kind in LoadKind)),
         "direction": Spec(str, MODEL, choices=("normal", "tangential")),
-        "radius_mm": Spec(float, MODEL, "(0, tissue.radius_mm)"),
+        "radius_mm": Spec(float, MODEL, "[0.001, tissue.radius_mm)"),
         "amplitude_Pa": Spec(float, MODEL, "[-1e9, 1e9]", nonzero=True),
         "force_N": Spec(float, MODEL, "[-1e9, 1e9]", nonzero=True),
     }),

@@ -142,10 +142,14 @@ def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
 def _check_unit_geometry(unit: Unit, ctx: Context) -> None:
     """Cross-field checks: pins under the board, and the unit inside the tissue cylinder."""
     board, pogo = unit.board, unit.pogo
+    if 0 < board.thickness_mm < 0.001:
+        raise SceneError("unit.board.thickness_mm", f"unit.board.thickness_mm = "
+                         f"{board.thickness_mm!r} is out of range: allowed 0 (no board) or "
+                         "0.001 <= thickness_mm <= 10")
     if unit.attachment == "pogo":
         if not board.present:
             raise SceneError("unit.board.thickness_mm", 'unit.board.thickness_mm = 0.0 is out '
-                             'of range for unit.attachment = "pogo": allowed 0 < thickness_mm '
+                             'of range for unit.attachment = "pogo": allowed 0.001 <= thickness_mm '
                              "<= 10 (the pins are soldered under the board)")
         r_board = 0.5 * board.diameter_mm
         if pogo.radius_mm + 0.5 * pogo.tip_diameter_mm > r_board:
@@ -199,6 +203,7 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
         table = _read_table(name, d.get(name, {}), ctx)
         if table or name != "effects":
             out[name] = table
+    _check_counts(out)
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
                          "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
@@ -206,6 +211,30 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
                          f"{str(ctx['load.kind'])!r}); use \"static\" or \"harmonic\" for "
                          "a patch or point load")
     return out
+
+
+#: Most profile points and time steps a scene may ask for (each is a row of the results).
+MAX_PROFILE_POINTS = 100_000
+MAX_TIME_STEPS = 1_000_000
+
+
+def _check_counts(out: Mapping[str, Mapping[str, Any]]) -> None:
+    """Cross-field limits on the sizes of the requested results."""
+    o, a = out["output"], out["analysis"]
+    n = o["profile_length_mm"] / o["profile_step_mm"]
+    if n > MAX_PROFILE_POINTS:
+        raise SceneError("output.profile_step_mm", f"output.profile_step_mm = "
+                         f"{o['profile_step_mm']!r} gives {n:.3g} profile points over "
+                         f"output.profile_length_mm = {o['profile_length_mm']!r}: allowed "
+                         f"profile_step_mm >= {o['profile_length_mm'] / MAX_PROFILE_POINTS:g} "
+                         f"(at most {MAX_PROFILE_POINTS} points)")
+    steps = a["duration_ms"] / a["time_step_ms"]
+    if a["kind"] == "transient" and steps > MAX_TIME_STEPS:
+        raise SceneError("analysis.time_step_ms", f"analysis.time_step_ms = "
+                         f"{a['time_step_ms']!r} gives {steps:.3g} steps over "
+                         f"analysis.duration_ms = {a['duration_ms']!r}: allowed time_step_ms >= "
+                         f"{a['duration_ms'] / MAX_TIME_STEPS:g} (at most {MAX_TIME_STEPS} "
+                         "steps)")
 
 
 def make(cls: type, table: Mapping[str, Any]) -> Any:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,20 @@ def register(subparsers: Any) -> None:
     p.add_argument("--json", metavar="OUT", help="write surface amplitudes and meta as JSON")
     p.add_argument("--vtk", metavar="OUT", help="write the field for ParaView (.vtu)")
     p.add_argument("--plot", metavar="OUT", help="write a PNG of amplitude against radius")
+    p.add_argument("--max-unknowns", type=_unknowns, default=None, metavar="N",
+                   help="refuse scenes estimated above N unknowns before solving (default "
+                   "1e6, sized for 24 GB; 'inf' to disable)")
     p.set_defaults(func=run)
+
+
+def _unknowns(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value >= 1000:
+        raise argparse.ArgumentTypeError(f"{value:g} is out of range: allowed >= 1000 or inf")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -30,7 +44,15 @@ def run(args: argparse.Namespace) -> int:
     for opt in _OUTPUTS:
         if getattr(args, opt) is not None:
             check_output_file(f"--{opt}", getattr(args, opt))
-    result = simulate(load_scene(args.scene))
+    from fem.cost import DEFAULT_MAX_UNKNOWNS, check_cost
+
+    limit = DEFAULT_MAX_UNKNOWNS if args.max_unknowns is None else args.max_unknowns
+    scene = load_scene(args.scene)
+    est = check_cost(scene, limit)
+    if est.seconds > 30:  # say so before a long run starts
+        print(f"hapticrom simulate: about {est.unknowns:.3g} unknowns, ~{est.memory_gb:.2g} GB, "
+              f"~{est.seconds / 60:.1f} min (estimate)", file=sys.stderr, flush=True)
+    result = simulate(scene, max_unknowns=limit)
     print(result.summary())
     if args.json:
         with atomic_path(args.json) as tmp:

@@ -209,13 +209,43 @@ def _check_values(space: Space, raw: Mapping[str, Any], where: str) -> dict[str,
     values = {}
     for p in space.parameters:
         if p.name in raw:
-            values[p.name] = p.check_value(_strip(raw[p.name]), f"{where}: {p.name}")
+            try:
+                values[p.name] = p.check_value(_strip(raw[p.name]), f"{where}: {p.name}")
+            except SpaceError:
+                choice = _same_scene_choice(space, p.name, _strip(raw[p.name]))
+                if choice is None:
+                    raise
+                values[p.name] = choice
         elif p.free:
             raise SpaceError(p.name, f"{where}: no value for parameter {p.name!r} "
                              f"({p.allowed()}); add the column or give --set {p.name}=VALUE")
         else:
             values[p.name] = p.value
     return values
+
+
+def _choice_scenes(space: Space, name: str) -> dict[str, str]:
+    """Scene hash of the space's center with each choice of categorical ``name``."""
+    from fem.scene import scene_hash
+
+    p = next(q for q in space.parameters if q.name == name)
+    center = space.center()
+    return {scene_hash(space.scene({**center, name: c})): c for c in p.choices}
+
+
+def _same_scene_choice(space: Space, name: str, value: Any) -> Any:
+    """The choice of categorical ``name`` that resolves to the same scene as ``value`` (a
+    material alias such as "A" for "ecoflex-00-10", as scene files accept), else None."""
+    from fem.scene import SceneError, scene_hash
+
+    p = next(q for q in space.parameters if q.name == name)
+    if p.type != "categorical" or not p.free or not isinstance(value, str):
+        return None
+    try:
+        h = scene_hash(space.scene({**space.center(), name: value}))
+    except (SpaceError, SceneError, ValueError, KeyError):
+        return None
+    return _choice_scenes(space, name).get(h)
 
 
 def _strip(value: Any) -> Any:

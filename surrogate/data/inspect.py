@@ -12,6 +12,7 @@ import numpy as np
 import pyarrow as pa
 
 from surrogate.data.errors import DatasetError
+from surrogate.data.integrity import manifest_problems, part_problems
 from surrogate.data.provenance import solver_key
 from surrogate.data.space import Space
 from surrogate.data.store import FEM_SOURCE, STATUSES, Store
@@ -21,6 +22,9 @@ __all__ = ["dataset_info", "merge_datasets", "validate_dataset"]
 def dataset_info(path: str | Path) -> dict[str, Any]:
     """Summary of a dataset: manifest essentials plus counts computed from the parts."""
     store = Store.open(path)
+    problems = part_problems(store)
+    if problems:  # counts over such parts would be wrong
+        raise DatasetError(str(store.path), f"{store.path}: {'; '.join(problems)}")
     m = store.manifest
     space = m["space"]["space"]
     counts = store.counts()
@@ -48,8 +52,11 @@ def validate_dataset(path: str | Path, rehash: bool = False) -> list[str]:
     "failed"; failed rows carry error text; generated ok rows have finite amplitudes and a
     profile on the manifest grid; parameter values lie in the space; each part's solver is
     in the manifest history. ``rehash`` recomputes every sample_id from scene_json."""
-    store = Store.open(path)
-    problems: list[str] = []
+    store = Store.open(path, check=False)
+    problems = [f"_manifest.json: {p}" for p in manifest_problems(store)]
+    if any("section(s) are missing" in p or "not a valid space" in p for p in problems):
+        return problems  # nothing below can be checked against a broken manifest
+    problems += part_problems(store)
     schema = store.schema
     tables = []
     for part in store.parts():

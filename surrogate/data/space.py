@@ -330,8 +330,13 @@ def _resolved_defaults(base: Mapping[str, Any]) -> dict[str, Any]:
 def check_space(space: Space) -> None:
     """Resolve the center and probe points into scenes (raising :class:`SpaceError` for paths
     the schema rejects), check the constraints admit points, and check that every free
-    parameter changes the scene somewhere."""
-    from fem.scene import scene_hash
+    parameter changes what the solver reads somewhere (a field the solver ignores for that
+    scene, e.g. the pins of a glued unit, does not count: ``fem.scene.effective_scene_dict``)."""
+    from fem.scene import effective_scene_dict
+
+    def scene_hash(scene: Any) -> str:
+        text = json.dumps(effective_scene_dict(scene), sort_keys=True, allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
 
     center = space.center()
     space.scene(center)
@@ -348,9 +353,11 @@ def check_space(space: Space) -> None:
         if not any(_changes(space, row, h, p, alt, scene_hash) for row, h in zip(rows, hashes,
                                                                                    strict=True)):
             raise SpaceError(f"parameter {p.name}.path",
-                             f"parameter {p.name!r} (path {', '.join(p.paths)}) never changes the "
-                             "resolved scene in the probe points: its list entry is always "
-                             "truncated away, or the field is overwritten")
+                             f"parameter {p.name!r} (path {', '.join(p.paths)}) never changes "
+                             "what the solver reads in the probe points: its list entry is "
+                             "always truncated away, the field is overwritten, or the solver "
+                             "ignores it there (e.g. pogo pins of a glued unit, the frequency "
+                             "of a static analysis)")
 
 
 def _changes(space: Space, row: Mapping[str, Any], h: str, p: Parameter, alt: np.ndarray,

@@ -48,6 +48,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from surrogate.data.errors import DatasetError
+from surrogate.data.integrity import manifest_digest, manifest_problems, part_problems
 from surrogate.data.space import Space, space_from_dict
 
 __all__ = [
@@ -159,6 +160,7 @@ class Store:
                 "columns": [{"name": f.name, "type": str(f.type)} for f in arrow_schema(space)]}
         data = {**head, **manifest}
         data.setdefault("runs", [])
+        data["digest"] = manifest_digest(data)
         path.mkdir(parents=True, exist_ok=True)
         write_json_atomic(path / MANIFEST_NAME, data)
         store = cls(path, data)
@@ -166,8 +168,9 @@ class Store:
         return store
 
     @classmethod
-    def open(cls, path: str | Path) -> Store:
-        """Open an existing dataset; :class:`DatasetError` if ``path`` is not one."""
+    def open(cls, path: str | Path, check: bool = True) -> Store:
+        """Open an existing dataset; :class:`DatasetError` if ``path`` is not one, or (with
+        ``check``) if its manifest was edited (:mod:`surrogate.data.integrity`)."""
         path = Path(path)
         mpath = path / MANIFEST_NAME
         if not mpath.is_file():
@@ -184,7 +187,12 @@ class Store:
             raise DatasetError(str(mpath), f"{mpath}: schema_version "
                                f"{data.get('schema_version')!r} is not supported (this "
                                f"version reads {SCHEMA_VERSION})")
-        return cls(path, data)
+        store = cls(path, data)
+        problems = manifest_problems(store) if check else []
+        if problems:
+            raise DatasetError(str(mpath), f"{mpath}: {'; '.join(problems)}. Restore the "
+                               "manifest, or regenerate the dataset")
+        return store
 
     @classmethod
     def exists(cls, path: str | Path) -> bool:
@@ -210,6 +218,7 @@ class Store:
     def save_manifest(self) -> None:
         """Write the (modified) manifest atomically."""
         self.manifest["updated"] = utc_now()
+        self.manifest["digest"] = manifest_digest(self.manifest)
         write_json_atomic(self.path / MANIFEST_NAME, self.manifest)
 
     # ---- locking
@@ -264,9 +273,8 @@ class Store:
             table = rows.replace_schema_metadata(None).cast(self.schema)
         else:
             table = rows_to_table(rows, self.schema)
-        if metadata:
-            table = table.replace_schema_metadata(
-                {"hapticrom": json.dumps(dict(metadata), sort_keys=True)})
+        meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
+        table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
         seq = self._next_seq()
         final = self.path / f"part-{seq:06d}.parquet"
         tmp = self.path / f".{final.name}.tmp"
@@ -302,6 +310,10 @@ class Store:
 
     def keys(self) -> tuple[set[tuple[str, str]], dict[int, str]]:
         """(set of (source, sample_id), {sample_index: sample_id} of generated rows)."""
+        problems = part_problems(self)
+        if problems:
+            raise DatasetError(str(self.path), f"{self.path}: {'; '.join(problems)}; remove "
+                               "the offending part(s) (hapticrom dataset validate lists them)")
         keys: set[tuple[str, str]] = set()
         index: dict[int, str] = {}
         for part in self.parts():
@@ -315,7 +327,10 @@ class Store:
 
     def part_metadata(self, part: Path) -> dict[str, Any]:
         """The ``hapticrom`` key-value metadata of a part ({} if none)."""
-        meta = pq.read_schema(part).metadata or {}
+        try:
+            meta = pq.read_schema(part).metadata or {}
+        except (OSError, pa.ArrowException) as err:
+            raise DatasetError(str(part), f"cannot read part {part}: {err}") from None
         raw = meta.get(b"hapticrom")
         return json.loads(raw) if raw else {}
 

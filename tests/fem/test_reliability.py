@@ -54,3 +54,28 @@ def test_a_scene_file_saved_with_a_byte_order_mark_loads(tmp_path):
     f = tmp_path / "bom.toml"
     f.write_bytes("\ufeff[analysis]\nkind = \"harmonic\"\n".encode())
     assert load_scene(f).analysis.kind == "harmonic"
+
+
+def test_unused_fields_follow_the_scene():
+    from fem.scene import effective_scene_dict, unused_fields
+
+    glued = scene_from_dict(unit_scene(encapsulation=[]))
+    assert {"unit.pogo", "unit.ring_thickness_mm", "load.radius_mm"} <= set(unused_fields(glued))
+    assert "pogo" not in effective_scene_dict(glued)["unit"]
+    pogo = scene_from_dict(unit_scene(attachment="pogo", encapsulation=["A"]))
+    assert "pogo" in effective_scene_dict(pogo)["unit"]
+    assert "unit.ring_contact" not in unused_fields(pogo)
+    static = scene_from_dict({"analysis": {"kind": "static"}})
+    assert "frequency_hz" not in effective_scene_dict(static)["analysis"]
+    assert "load.radius_mm" not in unused_fields(static)  # the default patch load uses it
+
+
+@pytest.mark.parametrize("skin_mm", [0.001, 0.01])
+def test_a_pogo_unit_on_a_micron_thin_skin_layer_solves(skin_mm):
+    """Once blamed the pin footprint; the thinnest allowed layer now meshes and solves."""
+    d = unit_scene(attachment="pogo", encapsulation=["A"])
+    d |= {"analysis": {"kind": "harmonic", "frequency_hz": 150.0}, "mesh": COARSE,
+          "tissue": {"layer": [{"material": "skin", "thickness_mm": skin_mm},
+                               {"material": "fat", "thickness_mm": 10.0}]}}
+    res = simulate(scene_from_dict(d))
+    assert np.isfinite(res.center_amplitude_um) and res.center_amplitude_um > 0

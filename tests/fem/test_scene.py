@@ -211,7 +211,7 @@ def _num(lo: float, hi: float, exclude_min: bool = False) -> st.SearchStrategy[f
 
 layers = st.fixed_dictionaries(
     {
-        "thickness_mm": _num(0, 1e4, exclude_min=True),
+        "thickness_mm": _num(0.001, 1e4),
         "E_kPa": _num(0, 1e9, exclude_min=True),
         "density_kg_m3": _num(0, 1e5, exclude_min=True),
         "nu": st.floats(0, 0.5, exclude_max=True),
@@ -319,7 +319,7 @@ ERRORS = [
     (_scene(tissue={"layer": [{"thickness_mm": 1.0, "E_kPa": 1.0, "nu": 0.3}]}),
      "tissue.layer[0].density_kg_m3", "0 < density_kg_m3 <= 1e5"),
     (_scene(tissue={"layer": [_layer(), {"material": "skin"}]}),
-     "tissue.layer[1].thickness_mm", "0 < thickness_mm <= 10000"),
+     "tissue.layer[1].thickness_mm", "0.001 <= thickness_mm <= 10000"),
     (_scene(tissue={"layer": [{"material": "skn", "thickness_mm": 1.0}]}),
      "tissue.layer[0].material", "muscle"),
     (_scene(tissue={"layer": []}), "tissue.layer", "1 <= number of layers <= 50"),
@@ -340,14 +340,16 @@ def _bad_value(path: str, value: Any, **extra: dict[str, Any]) -> tuple[dict, st
 
 # (path, [bad values], [good values], allowed text, extra tables needed by the good values)
 RANGES = [
-    ("tissue.layer[0].thickness_mm", [0, -1, 10000.5], [1e-9, 10000], "0 < thickness_mm <= 10000",
+    ("tissue.layer[0].thickness_mm", [0, -1, 1e-4, 10000.5], [0.001, 10000],
+     "0.001 <= thickness_mm <= 10000",
      {}),
     ("tissue.layer[0].E_kPa", [0.0, 1.1e9], [1e-6, 1e9], "0 < E_kPa <= 1e9", {}),
     ("tissue.layer[0].density_kg_m3", [0, 100001], [0.1, 1e5], "0 < density_kg_m3 <= 1e5", {}),
     ("tissue.layer[0].nu", [-0.01, 0.5, 0.6, math.nan], [0, 0.49999], "0 <= nu < 0.5", {}),
     ("tissue.layer[0].loss_factor", [-0.1, 2.01], [0, 2], "0 <= loss_factor <= 2", {}),
-    ("tissue.radius_mm", [0, 1e5 + 1], [20, 1e5], "0 < radius_mm <= 1e5", {}),
-    ("load.radius_mm", [0, 50, 51], [0.01, 49.9], "0 < radius_mm < tissue.radius_mm (= 50)", {}),
+    ("tissue.radius_mm", [0, 1e5 + 1], [20, 1e5], "0.001 <= radius_mm <= 1e5", {}),
+    ("load.radius_mm", [0, 1e-4, 50, 51], [0.01, 49.9],
+     "0.001 <= radius_mm < tissue.radius_mm (= 50)", {}),
     ("load.amplitude_Pa", [0, 1.5e9, -1.5e9, math.inf], [-1e9, 1e9, -3],
      "-1e9 <= amplitude_Pa <= 1e9, non-zero", {}),
     ("load.force_N", [0.0, 2e9, -2e9], [-1e9, 1e9, 1e-3], "-1e9 <= force_N <= 1e9, non-zero", {}),

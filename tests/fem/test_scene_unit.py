@@ -292,7 +292,7 @@ def test_pogo_needs_a_board() -> None:
     with pytest.raises(SceneError) as info:
         scene_from_dict(unit_scene(attachment="pogo", board={"thickness_mm": 0.0}))
     assert info.value.field == "unit.board.thickness_mm"
-    assert "0 < thickness_mm <= 10" in str(info.value) and "pogo" in str(info.value)
+    assert "0.001 <= thickness_mm <= 10" in str(info.value) and "pogo" in str(info.value)
 
 
 @pytest.mark.parametrize(("unit", "tissue_mm", "field"), [

@@ -25,6 +25,7 @@ from hapticrom.cli import main
 from surrogate.data.errors import DatasetError
 from surrogate.data.generate import generate
 from surrogate.data.inspect import validate_dataset
+from surrogate.data.integrity import manifest_digest
 from surrogate.data.plan import plan_samples
 from surrogate.data.space import SpaceError, space_from_dict
 from surrogate.data.store import FEM_SOURCE, MANIFEST_NAME, Store
@@ -220,6 +221,7 @@ def test_resume_refuses_other_space_or_solver(tmp_path: Path) -> None:
     m = json.loads((out / MANIFEST_NAME).read_text())
     m["solver"]["fingerprint"] = "0" * 64
     m["solver_history"] = [m["solver"]]
+    m["digest"] = manifest_digest(m)  # as an older solver version would have written it
     (out / MANIFEST_NAME).write_text(json.dumps(m))
     with pytest.raises(DatasetError, match="allow_solver_change"):
         generate(space_from_dict(SPACE), 5, out, workers=1, progress=False)
@@ -385,3 +387,14 @@ def test_transient_rows_store_time_histories(tmp_path: Path) -> None:
         np.testing.assert_array_equal(df.loc[1, "history_magnitude_um"][k],
                                       point["magnitude_um"])
     assert validate_dataset(tmp_path / "t") == []
+
+
+def test_an_absurd_sample_count_is_refused_at_once(tmp_path: Path, space_file: Path,
+                                                   capsys: pytest.CaptureFixture) -> None:
+    from surrogate.data.plan import MAX_SAMPLES
+
+    out = tmp_path / "out"
+    assert main(["generate", "--space", str(space_file), "--out", str(out), "--n",
+                 "2000000000", "--no-progress"]) == 2  # refused before planning a point
+    assert f"allowed 1 <= n <= {MAX_SAMPLES}" in capsys.readouterr().err
+    assert not out.exists()

@@ -281,3 +281,27 @@ def test_abaqus_csv_with_quoted_header(tmp_path: Path) -> None:
     d, a = read_profile_csv(p, distance_unit="m", amplitude_unit="m")
     np.testing.assert_allclose(d, [0.0, 2.0])
     np.testing.assert_allclose(a, [4.0, 1.0])
+
+
+def test_material_aliases_are_accepted_as_scene_files_accept_them(tmp_path: Path) -> None:
+    """"A" is Ecoflex 00-10 in a scene; an ingested table may say so too (stored canonical)."""
+    from surrogate.data.space import space_from_dict
+
+    space = space_from_dict({
+        "space": {"name": "rings", "seed": 1},
+        "base": {"load": {"kind": "unit"}, "analysis": {"kind": "harmonic"},
+                 "mesh": {"order": 1, "near_size_mm": 1.0, "far_size_mm": 4.0}},
+        "parameter": [
+            {"name": "ring", "type": "categorical", "path": "unit.encapsulation[0]",
+             "choices": ["ecoflex-00-10", "dragon-skin-30"]},
+            {"name": "frequency_hz", "type": "continuous", "path": "analysis.frequency_hz",
+             "low": 100.0, "high": 200.0}]})
+    table = tmp_path / "t.csv"
+    table.write_text("ring,frequency_hz,center_amplitude_um,edge_amplitude_um\n"
+                     "A,150,2,1\nDragon Skin 30,120,3,1\n")
+    ingest_table(table, tmp_path / "ds", space)
+    df = pd.read_parquet(tmp_path / "ds")
+    assert sorted(df["ring"]) == ["dragon-skin-30", "ecoflex-00-10"]
+    table.write_text("ring,frequency_hz,center_amplitude_um\nB,150,2\n")  # B is Ecoflex 00-50
+    with pytest.raises(SpaceError, match="ring = 'B' is outside the space"):
+        ingest_table(table, tmp_path / "ds2", space)

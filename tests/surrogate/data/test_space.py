@@ -233,8 +233,25 @@ def test_range_outside_the_scene_schema_names_parameter() -> None:
 def test_dead_parameter_is_reported() -> None:
     # r2 writes radii_mm[2], but n_probes never keeps more than 2 entries
     params = _probe_params(max_probes=2)
-    with pytest.raises(SpaceError, match=r"'r2'.*never changes the resolved scene"):
+    with pytest.raises(SpaceError, match=r"'r2'.*never changes what the solver reads"):
         space_from_dict(_space(params))
+
+
+@pytest.mark.parametrize("base, param", [
+    ({"load": {"kind": "unit"}, "unit": {"attachment": "glued"}},
+     {"name": "pin_k", "type": "continuous", "path": "unit.pogo.stiffness_N_m",
+      "low": 1000.0, "high": 5000.0}),
+    ({"analysis": {"kind": "static"}},
+     {"name": "f", "type": "continuous", "path": "analysis.frequency_hz",
+      "low": 100.0, "high": 200.0}),
+])
+def test_a_parameter_the_solver_ignores_is_reported(base, param):
+    """Pins under a glued unit, a frequency in a static analysis: the scene changes, the
+    solution cannot."""
+    d = _space([SKIN, param])
+    d["base"] = {**d["base"], **base}
+    with pytest.raises(SpaceError, match=rf"'{param['name']}'.*solver ignores it"):
+        space_from_dict(d)
 
 
 def test_space_level_errors() -> None:

@@ -60,7 +60,7 @@ def _store(path: Path, rows: list[dict[str, Any]] | None = None, solver: dict | 
            ) -> Store:
     solver = solver or SOLVER
     store = Store.create(path, _space(), solver=solver, solver_history=[solver],
-                         sampling={"sampler": "sobol"}, profile_grid_mm=[0.0, 1.0, 2.0])
+                         sampling={"sampler": "sobol", "seed": 1}, profile_grid_mm=[0.0, 1.0, 2.0])
     if rows:
         with store.lock():
             store.write_part(rows, {"solver": solver})
@@ -106,8 +106,8 @@ def test_parts_are_numbered_and_temp_files_removed(tmp_path: Path) -> None:
         second = store.write_part([_row(1)])
     assert [p.name for p in store.parts()] == ["part-000008.parquet", "part-000009.parquet"]
     assert second.name == "part-000009.parquet" and not store.temp_files()
-    meta = pq.read_schema(first).metadata
-    assert b"hapticrom" not in (meta or {})  # no metadata asked for
+    meta = json.loads(pq.read_schema(first).metadata[b"hapticrom"])
+    assert meta == {"space_hash": store.manifest["space_hash"]}  # only what every part records
 
 
 def test_write_part_rejects_unknown_columns_and_bad_types(tmp_path: Path) -> None:

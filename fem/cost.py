@@ -1,0 +1,194 @@
+"""What a scene will cost before anything is allocated: cells, unknowns, memory and time.
+
+The mesher grades element sizes along r and z (``fem.mesh.graded_lines``: the number of cells
+of a segment is the integral of 1/h over it) and appends the absorbers (a PML or damping layer
+one or three reference wavelengths thick, meshed at the wave size, or a graded static far
+field). Those counts have closed forms, so the size of a scene is known from its numbers alone,
+even for inputs (a 1e-30 kPa layer, 0.1 Hz, a 100 m radius) whose mesh could never be built.
+
+:func:`check_cost` turns an estimate above the limit into a :class:`fem.scene.SceneError`
+naming the scene fields that drive the size, with values that would fit. Memory and time are
+rough models calibrated on this solver (sparse LU of a 2-D grid: fill ~ N log N, time ~ N^1.5);
+the unknown count is the reliable part and the limit is stated in it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .absorbers import (
+    DAMPING_LAYER_WAVELENGTHS,
+    ELEMENTS_PER_WAVELENGTH,
+    STATIC_EXTENSION_FACTOR,
+    reference_speed,
+)
+from .domain import MeshSpec
+from .problem import drive_omega, mesh_spec, shortest_shear_wavelength
+from .scene import Scene, SceneError
+
+__all__ = ["DEFAULT_MAX_UNKNOWNS", "CostEstimate", "check_cost", "estimate_cost"]
+
+#: Largest problem solved without ``force``: about 12 GB of sparse LU by the model below,
+#: sized for a 24 GB, 2-core machine (the rest for Python, the mesh and the OS).
+DEFAULT_MAX_UNKNOWNS = 1_000_000
+#: A transient may take this many steps of a problem at the unknown limit (work = unknowns x
+#: steps is what its time grows with, the factorisation being reused across steps).
+STEPS_AT_LIMIT = 2000
+#: Calibration of the memory and time models on the default forearm (quadratic, mode 1).
+_REF_UNKNOWNS, _REF_SECONDS = 16_432, 0.35
+_LU_BYTES_PER_UNKNOWN_LOG2 = 440.0  # complex LU fill ~ N log2 N
+_CELLS_ABOVE_SKIN = 20  # the unit's parts (motor, board, pins): a few cell rows
+
+
+@dataclass(frozen=True)
+class CostEstimate:
+    """Cells along r and z (absorbers included), unknowns, memory [GB] and time [s]."""
+
+    cells_r: float
+    cells_z: float
+    unknowns: float
+    memory_gb: float
+    seconds: float
+    absorber_r: float = 0.0  # of cells_r: beyond the tissue radius (PML, far field)
+    absorber_z: float = 0.0  # of cells_z: below the tissue
+    near_r: float = 0.0  # of cells_r: inside mesh.near_radius_mm at the near size
+
+
+def _graded_cells(length: float, x0: float, h0: float, h1: float, growth: float) -> float:
+    """Integral of 1/h over [0, length] for h = min(h1, h0 + growth (x - x0)+) (see
+    ``fem.mesh.growing_size``)."""
+    flat = min(length, x0) / h0
+    rest = max(0.0, length - x0)
+    if rest == 0.0 or h1 <= h0:
+        return flat + rest / h0
+    ramp = (h1 - h0) / growth  # length over which h grows from h0 to h1
+    if rest <= ramp:
+        return flat + math.log((h0 + growth * rest) / h0) / growth
+    return flat + math.log(h1 / h0) / growth + (rest - ramp) / h1
+
+
+def _absorber_cells(kind: str, end: float, size: float, model_size: float, lam_ref: float,
+                    h_wave: float) -> float:
+    """Cells of the region beyond ``end`` (see ``fem.domain.layered_domain``)."""
+    if kind == "static":
+        return 4.0 * math.log(STATIC_EXTENSION_FACTOR * size / max(end * 1e-3, 1e-12))
+    wavelengths = 1.0 if kind == "harmonic" else DAMPING_LAYER_WAVELENGTHS
+    start = max(end, min(lam_ref, 20.0 * model_size))
+    extension = 0.0
+    if start > end:  # graded from the last cell up to h_wave, then at h_wave
+        extension = (start - end) / h_wave + math.log(max(h_wave / 1e-4, 1.0)) / math.log(1.25)
+    return extension + max(6.0, wavelengths * lam_ref / h_wave)
+
+
+def estimate_cost(scene: Scene) -> CostEstimate:
+    """The size of ``scene``'s discretisation, from its numbers alone (nothing allocated)."""
+    spec: MeshSpec = mesh_spec(scene)
+    kind = scene.analysis.kind
+    radius, depth = scene.tissue.radius_m, sum(ly.thickness_m for ly in scene.tissue.layers)
+    cells_r = _graded_cells(radius, spec.near_radius, spec.near_size, spec.far_size, spec.growth)
+    cells_z = _graded_cells(depth, 0.0, spec.near_size, spec.far_size, spec.growth)
+    cells_z += len(scene.tissue.layers)  # every interface is a line
+    if kind != "static":
+        omega = drive_omega(scene)
+        speeds = [ly.solid().shear_speed_m_s for ly in scene.tissue.layers]
+        lam_ref = 2 * math.pi * reference_speed(speeds) / omega
+        lam_min, _ = shortest_shear_wavelength(scene)
+        h_wave = min(lam_min * spec.order / ELEMENTS_PER_WAVELENGTH, 4 * spec.far_size)
+    else:
+        lam_ref = h_wave = 0.0
+    absorber_r = absorber_z = 0.0
+    if scene.tissue.side == "absorbing":
+        absorber_r = _absorber_cells(kind, radius, radius, radius, lam_ref, h_wave)
+    if scene.tissue.base == "absorbing":
+        absorber_z = _absorber_cells(kind, depth, max(depth, radius), max(depth, radius),
+                                     lam_ref, h_wave)
+    cells_r, cells_z = cells_r + absorber_r, cells_z + absorber_z
+    cells = cells_r * cells_z
+    if scene.unit is not None:  # the unit's parts above the skin, out to its outer radius
+        cells_r += 2 * (len(scene.unit.encapsulation) + 4)  # its radii are cell lines
+        cells += _CELLS_ABOVE_SKIN * scene.unit.outer_radius_m / spec.near_size
+    dofs_per_node = 2 if scene.load.fourier_mode == 0 else 3
+    n = cells * spec.order**2 * dofs_per_node  # nodes per cell: 1 (Q4) or 4 (Q9)
+    memory = _LU_BYTES_PER_UNKNOWN_LOG2 * n * math.log2(max(n, 2.0)) / 1e9
+    seconds = _REF_SECONDS * (n / _REF_UNKNOWNS) ** 1.5
+    near_r = min(spec.near_radius, radius) / spec.near_size
+    return CostEstimate(cells_r, cells_z, n, memory, seconds, absorber_r, absorber_z, near_r)
+
+
+def check_cost(scene: Scene, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> CostEstimate:
+    """The estimate, or a SceneError naming what drives a size above ``max_unknowns``."""
+    est = estimate_cost(scene)
+    a = scene.analysis
+    if a.kind == "transient" and est.unknowns <= max_unknowns:
+        steps = a.duration_ms / a.time_step_ms
+        if est.unknowns * steps > max_unknowns * STEPS_AT_LIMIT:
+            most = max_unknowns * STEPS_AT_LIMIT / est.unknowns
+            raise SceneError("analysis.duration_ms", f"analysis.duration_ms: {steps:.3g} time "
+                             f"steps of {est.unknowns:.3g} unknowns exceed the work limit "
+                             f"({max_unknowns:.3g} unknowns x {STEPS_AT_LIMIT} steps): use at "
+                             f"most {most:.3g} steps (analysis.duration_ms <= "
+                             f"{most * a.time_step_ms:.3g} at this analysis.time_step_ms), a "
+                             "coarser mesh, or raise the limit")
+    if est.unknowns <= max_unknowns:
+        return est
+    field, advice = _driver(scene, est, max_unknowns)
+    raise SceneError(field, f"{field}: this scene needs about {est.unknowns:.3g} unknowns "
+                     f"({est.cells_r:.3g} x {est.cells_z:.3g} cells, ~{est.memory_gb:.3g} GB, "
+                     f"~{_duration(est.seconds)}), above the limit of {max_unknowns:.3g}: "
+                     f"{advice}. To run it anyway raise the limit (hapticrom simulate "
+                     "--max-unknowns N, or fem.simulate(scene, max_unknowns=N))")
+
+
+def _driver(scene: Scene, est: CostEstimate, limit: float) -> tuple[str, str]:
+    """The field most responsible for the size, and what to change."""
+    ratio = est.unknowns / limit  # one length scaled by this fits: unknowns ~ 1 / h (one axis)
+    shrink = math.sqrt(ratio)  # both axes (far size, or a wavelength that caps every size)
+    m, t = scene.mesh, scene.tissue
+    if scene.analysis.kind != "static":
+        lam_min, name = shortest_shear_wavelength(scene)
+        h_wave = lam_min * m.order / ELEMENTS_PER_WAVELENGTH
+        if m.follow_wavelength and h_wave * 1e3 < m.near_size_mm:
+            field = _material_field(scene, name)
+            return field, (f"the shortest shear wavelength ({lam_min * 1e3:.3g} mm, in {name!r} "
+                           f"at {scene.analysis.frequency_hz:g} Hz) sets the element size "
+                           f"{h_wave * 1e3:.3g} mm; a stiffer {field} (about {ratio:.3g}x) "
+                           "or a lower analysis.frequency_hz would fit, or set "
+                           "mesh.follow_wavelength = false to mesh at the given sizes")
+    tissue_r, tissue_z = est.cells_r - est.absorber_r, est.cells_z - est.absorber_z
+    wave = scene.analysis.kind != "static"
+    if wave and (est.absorber_r > tissue_r or est.absorber_z > tissue_z):
+        return "analysis.frequency_hz", (
+            f"at {scene.analysis.frequency_hz:g} Hz the absorbing layers (one wavelength thick) "
+            "reach far beyond the tissue; use a higher frequency, a static analysis, or "
+            'tissue.side = "fixed" and tissue.base = "fixed"')
+    if tissue_r >= tissue_z:
+        if est.near_r > 0.5 * tissue_r:
+            return "mesh.near_size_mm", (f"use mesh.near_size_mm >= "
+                                         f"{m.near_size_mm * ratio:.3g}")
+        return "tissue.radius_mm", (f"use tissue.radius_mm <= {t.radius_mm / ratio:.3g} or "
+                                    f"mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+    thickest = max(range(len(t.layers)), key=lambda i: t.layers[i].thickness_mm)
+    return f"tissue.layer[{thickest}].thickness_mm", (
+        f"the tissue is {t.depth_mm:g} mm deep; use a thinner "
+        f"tissue.layer[{thickest}].thickness_mm (the total <= {t.depth_mm / ratio:.3g} mm) "
+        f"or mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+
+
+def _material_field(scene: Scene, name: str) -> str:
+    for i, ly in enumerate(scene.tissue.layers):
+        if ly.name == name:
+            return f"tissue.layer[{i}].E_kPa"
+    if scene.unit is not None:
+        for i, ring in enumerate(scene.unit.encapsulation):
+            if ring.name == name:
+                return f"unit.encapsulation[{i}].E_kPa"
+    return "tissue.layer.E_kPa"
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.3g} h"

@@ -1,0 +1,55 @@
+"""``hapticrom plan LAYOUT.toml``: lay out an array on the shipped surrogate.
+
+    hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from hapticrom.outputs import atomic_path, check_output_file
+
+__all__ = ["register"]
+
+
+def _run(args: argparse.Namespace) -> int:
+    from planner import load_layout, plan_layout, plan_to_dict, write_plan_plot
+
+    for opt in ("out", "plot"):
+        if getattr(args, opt):
+            check_output_file(f"--{opt}", getattr(args, opt))
+    plan = plan_layout(load_layout(args.layout))
+    req = plan.request
+    print(f"{req.rows} x {req.cols} {req.grid} array, leakage <= {req.criterion.max_ratio:g} of "
+          f"own amplitude ({req.criterion.superposition}), model {req.model}")
+    for c in plan.candidates:
+        pitch = "infeasible" if c.pitch_mm is None else (
+            f"pitch {c.pitch_mm:6.2f} mm (edge to edge {c.edge_to_edge_mm:5.2f} mm; with the "
+            f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
+        flag = " [extrapolated]" if c.extrapolated else ""
+        print(f"  {c.name:22s} {c.frequency_hz:6.0f} Hz  center {c.center_um:6.2f} um  "
+              f"{pitch}{flag}")
+    if plan.best is None:
+        print("no design meets the criterion within the pitch bounds")
+    else:
+        print(f"best: {plan.best.name} at {plan.best.frequency_hz:g} Hz, pitch "
+              f"{plan.best.pitch_mm:.2f} mm, margin {plan.margin:.3f}")
+    if args.out:
+        with atomic_path(args.out) as tmp:
+            tmp.write_text(json.dumps(plan_to_dict(plan), indent=1) + "\n")
+        print(f"wrote {args.out}")
+    if args.plot:
+        with atomic_path(args.plot) as tmp:
+            write_plan_plot(plan, tmp)
+        print(f"wrote {args.plot}")
+    return 0 if plan.best is not None else 1
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``plan`` subcommand."""
+    p = subparsers.add_parser("plan", help="lay out a haptic array on the surrogate")
+    p.add_argument("layout", help="layout request TOML (see examples/forearm-layout.toml)")
+    p.add_argument("--out", metavar="JSON", help="write the plan as JSON")
+    p.add_argument("--plot", metavar="PNG", help="write the layout and profiles figure")
+    p.set_defaults(func=_run)

@@ -1,0 +1,15 @@
+"""Array layout planning on the run-time surrogate (numpy + onnxruntime; never the FE solver,
+torch or scikit-learn).
+
+    from planner import load_layout, plan_layout
+    plan = plan_layout(load_layout("examples/forearm-layout.toml"))
+"""
+
+from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+from planner.layout import LayoutError, LayoutRequest, layout_from_dict, load_layout
+from planner.optimise import DesignResult, Plan, plan_layout
+from planner.report import plan_to_dict, write_plan_plot
+
+__all__ = ["DesignResult", "LayoutError", "LayoutRequest", "Plan", "UnitField",
+           "crosstalk_matrix", "layout_from_dict", "leakage_ratio", "load_layout", "plan_layout",
+           "plan_to_dict", "site_positions", "write_plan_plot"]

@@ -1,0 +1,145 @@
+"""The layout optimiser: the smallest pitch at which every site meets the crosstalk criterion,
+for each candidate design and drive frequency, on the shipped surrogate (run time only).
+
+For identical units on a regular grid the worst-site leakage ratio is a function of the pitch
+alone and, with the envelope profile (:mod:`planner.crosstalk`), never grows with it; the
+smallest feasible pitch is found by bisection to ``PITCH_TOL_MM``. Units may not overlap: the
+pitch is at least two edge radii. The surrogate's uncertainty is carried through as a second,
+conservative pitch: the leakage of the upper 95 % bound of the neighbours' amplitudes against
+the lower bound of the site's own (log-normal, 1.96 sigma).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+from planner.layout import LayoutError, LayoutRequest
+from surrogate.runtime import load_predictor
+from surrogate.runtime.encoding import PredictorInputError
+
+__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "plan_layout"]
+
+PITCH_TOL_MM = 0.01
+Z95 = 1.959964
+
+
+@dataclass
+class DesignResult:
+    """One (design, frequency): its unit field, smallest feasible pitches and uncertainty."""
+
+    name: str
+    frequency_hz: float
+    inputs: dict[str, Any]
+    center_um: float
+    edge_radius_mm: float
+    log_std_center: float
+    log_std_profile_max: float
+    extrapolated: bool
+    pitch_mm: float | None  # None: infeasible within the pitch bounds
+    pitch_95_mm: float | None  # with the surrogate's 95 % bounds
+    unit: UnitField | None = None  # the nominal amplitude field
+
+    @property
+    def edge_to_edge_mm(self) -> float | None:
+        """Clear skin between neighbouring units at the chosen pitch [mm]."""
+        return None if self.pitch_mm is None else self.pitch_mm - 2 * self.edge_radius_mm
+
+
+@dataclass
+class Plan:
+    """The optimiser's answer: every candidate, the chosen one and its array."""
+
+    request: LayoutRequest
+    candidates: list[DesignResult]
+    best: DesignResult | None
+    positions_mm: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    crosstalk_um: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    ratios: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def margin(self) -> float | None:
+        """max_ratio / worst ratio at the chosen pitch (>= 1: the criterion holds)."""
+        if self.best is None or not self.ratios.size:
+            return None
+        return float(self.request.criterion.max_ratio / self.ratios.max())
+
+
+def worst_ratio(f: UnitField, req: LayoutRequest, pitch_mm: float) -> float:
+    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    if len(pos) < 2:
+        return 0.0
+    return float(leakage_ratio(crosstalk_matrix(f, pos), req.criterion.superposition).max())
+
+
+def smallest_pitch(f: UnitField, req: LayoutRequest) -> float | None:
+    """Smallest pitch in the request's bounds (and >= 2 edge radii) meeting the criterion."""
+    lo = max(req.min_pitch_mm, 2 * f.edge_radius_mm)
+    hi = req.max_pitch_mm
+    limit = req.criterion.max_ratio
+    if lo > hi or worst_ratio(f, req, hi) > limit:
+        return None
+    if worst_ratio(f, req, lo) <= limit:
+        return lo
+    while hi - lo > PITCH_TOL_MM:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if worst_ratio(f, req, mid) <= limit else (mid, hi)
+    return hi
+
+
+def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[str, Any]]:
+    predictor = load_predictor(req.model)
+    combos = list(itertools.product(req.designs, req.frequencies_hz))
+    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for d, f in combos]
+    names = predictor.input_names
+    for i, row in enumerate(rows):
+        missing = [n for n in names if n not in row]
+        unknown = [k for k in row if k not in names]
+        where = f"design[{req.designs.index(combos[i][0])}]"
+        if unknown:
+            raise LayoutError(f"{where}.{unknown[0]}", f"{where}.{unknown[0]}: not an input of "
+                              f"{req.model} (inputs: {', '.join(names)})")
+        if missing:
+            raise LayoutError(f"{where}.{missing[0]}", f"{where}: no value for model input "
+                              f"{missing[0]!r}; give it in the design or in [site]")
+    X = {n: np.array([r[n] for r in rows]) for n in names}
+    try:
+        out = predictor.predict(X, extrapolate=req.allow_extrapolation)
+    except PredictorInputError as err:
+        raise LayoutError(f"design.{err.field}", f"design or site input {err}; set "
+                          "model.allow_extrapolation = true to plan outside the trained "
+                          "range (flagged in the plan)") from None
+    return predictor, combos, out
+
+
+def plan_layout(req: LayoutRequest) -> Plan:
+    """Evaluate every design at every drive frequency, pick the smallest feasible pitch
+    (ties: the larger own amplitude)."""
+    predictor, combos, out = _predict(req)
+    grid = predictor.profile_distance_mm
+    results = []
+    for k, (design, freq) in enumerate(combos):
+        center, profile = out["center_amplitude_um"][k], out["profile_um"][k]
+        s_c, s_p = out["center_amplitude_um_log_std"][k], out["profile_um_log_std"][k]
+        edge = float(out["edge_radius_mm"][k])
+        nominal = UnitField(float(center), edge, grid, profile)
+        bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
+                          profile * np.exp(Z95 * s_p))
+        results.append(DesignResult(
+            design["name"], float(freq), dict(design["inputs"]), float(center), edge,
+            float(s_c), float(s_p.max()),
+            bool(out["extrapolated"][k]) if "extrapolated" in out else False,
+            smallest_pitch(nominal, req), smallest_pitch(bound, req), nominal))
+    feasible = [r for r in results if r.pitch_mm is not None]
+    best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
+    result = Plan(req, results, best)
+    if best is not None:
+        f = best.unit
+        result.positions_mm = site_positions(req.rows, req.cols, best.pitch_mm, req.grid)
+        result.crosstalk_um = crosstalk_matrix(f, result.positions_mm)
+        result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
+    return result
