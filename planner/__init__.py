@@ -6,10 +6,25 @@ torch or scikit-learn).
 """
 
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+from planner.drive import DriveSolution, drive_levels
 from planner.layout import LayoutError, LayoutRequest, layout_from_dict, load_layout
 from planner.optimise import DesignResult, Plan, plan_layout
 from planner.report import plan_to_dict, write_plan_plot
 
-__all__ = ["DesignResult", "LayoutError", "LayoutRequest", "Plan", "UnitField",
-           "crosstalk_matrix", "layout_from_dict", "leakage_ratio", "load_layout", "plan_layout",
-           "plan_to_dict", "site_positions", "write_plan_plot"]
+__all__ = [
+           "DesignResult",
+           "DriveSolution",
+           "LayoutError",
+           "LayoutRequest",
+           "Plan",
+           "UnitField",
+           "crosstalk_matrix",
+           "drive_levels",
+           "layout_from_dict",
+           "leakage_ratio",
+           "load_layout",
+           "plan_layout",
+           "plan_to_dict",
+           "site_positions",
+           "write_plan_plot",
+]
