@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from . import haptic_unit
 from .absorbers import (
     DAMPING_LAYER_WAVELENGTHS,
     ELEMENTS_PER_WAVELENGTH,
@@ -24,7 +25,7 @@ from .absorbers import (
     reference_speed,
 )
 from .domain import MeshSpec
-from .problem import drive_omega, mesh_spec, shortest_shear_wavelength
+from .problem import drive_omega, mesh_spec, resolve_effects, shortest_shear_wavelength
 from .scene import Scene, SceneError
 
 __all__ = ["DEFAULT_MAX_UNKNOWNS", "CostEstimate", "check_cost", "estimate_cost"]
@@ -35,10 +36,10 @@ DEFAULT_MAX_UNKNOWNS = 1_000_000
 #: A transient may take this many steps of a problem at the unknown limit (work = unknowns x
 #: steps is what its time grows with, the factorisation being reused across steps).
 STEPS_AT_LIMIT = 2000
-#: Calibration of the memory and time models on the default forearm (quadratic, mode 1).
-_REF_UNKNOWNS, _REF_SECONDS = 16_432, 0.35
+#: Calibration of the time model on the default forearm (quadratic, mode 1): its estimated
+#: unknowns (the mesh has 16,432) and its measured solve time.
+_REF_UNKNOWNS, _REF_SECONDS = 18_619, 0.35
 _LU_BYTES_PER_UNKNOWN_LOG2 = 440.0  # complex LU fill ~ N log2 N
-_CELLS_ABOVE_SKIN = 20  # the unit's parts (motor, board, pins): a few cell rows
 
 
 @dataclass(frozen=True)
@@ -81,14 +82,41 @@ def _absorber_cells(kind: str, end: float, size: float, model_size: float, lam_r
     return extension + max(6.0, wavelengths * lam_ref / h_wave)
 
 
+def _segment_slack(spec: MeshSpec) -> float:
+    """Upper bound of the cells a segment adds beyond the integral of 1/h over it: its count
+    is rounded up, and at least ``min_cells`` (see ``fem.domain.layered_domain``)."""
+    return 2.0 if spec.order == 1 else 1.0
+
+
+def _unit_cells(scene: Scene, spec: MeshSpec) -> tuple[float, float, float]:
+    """(extra r segments, cells along r under the unit, cell rows above the skin) of the
+    unit's parts, from its layout (geometry only, nothing allocated)."""
+    effects = resolve_effects(scene)
+    lay = haptic_unit.layout(scene.unit, effects["encapsulation"], effects["unit_mass"],
+                             effects["rocking"], effects["hysteretic_damping"])
+    slack = _segment_slack(spec)
+    r_pts = {0.0, *lay.r_breaks, *(x for b in lay.blocks for x in (b.r0, b.r1))}
+    r_pts = {r for r in r_pts if 0.0 <= r <= scene.tissue.radius_m}
+    z_pts = {0.0, *lay.z_breaks, *(z for b in lay.blocks for z in (b.z0, b.z1) if z <= 0.0)}
+    height = -min(z_pts)
+    under = max(r_pts) / spec.near_size + slack * (len(r_pts) - 1)
+    rows = height / spec.near_size + slack * (len(z_pts) - 1)
+    return float(len(r_pts)), under, rows
+
+
 def estimate_cost(scene: Scene) -> CostEstimate:
-    """The size of ``scene``'s discretisation, from its numbers alone (nothing allocated)."""
+    """The size of ``scene``'s discretisation, from its numbers alone (nothing allocated).
+
+    The unknown count is an upper bound of the mesh's (each graded segment is counted with its
+    rounding up, every cell line with its nodes); memory and time are rough models."""
     spec: MeshSpec = mesh_spec(scene)
     kind = scene.analysis.kind
     radius, depth = scene.tissue.radius_m, sum(ly.thickness_m for ly in scene.tissue.layers)
+    slack = _segment_slack(spec)
     cells_r = _graded_cells(radius, spec.near_radius, spec.near_size, spec.far_size, spec.growth)
+    cells_r += slack * (2 if spec.near_radius < radius else 1)
     cells_z = _graded_cells(depth, 0.0, spec.near_size, spec.far_size, spec.growth)
-    cells_z += len(scene.tissue.layers)  # every interface is a line
+    cells_z += slack * len(scene.tissue.layers)  # every interface is a line
     if kind != "static":
         omega = drive_omega(scene)
         speeds = [ly.solid().shear_speed_m_s for ly in scene.tissue.layers]
@@ -104,12 +132,14 @@ def estimate_cost(scene: Scene) -> CostEstimate:
         absorber_z = _absorber_cells(kind, depth, max(depth, radius), max(depth, radius),
                                      lam_ref, h_wave)
     cells_r, cells_z = cells_r + absorber_r, cells_z + absorber_z
-    cells = cells_r * cells_z
+    o = spec.order
+    nodes = (o * cells_r + 1) * (o * cells_z + 1)
     if scene.unit is not None:  # the unit's parts above the skin, out to its outer radius
-        cells_r += 2 * (len(scene.unit.encapsulation) + 4)  # its radii are cell lines
-        cells += _CELLS_ABOVE_SKIN * scene.unit.outer_radius_m / spec.near_size
+        segments, under, rows = _unit_cells(scene, spec)
+        cells_r += slack * segments  # its radii are cell lines through the whole grid
+        nodes += o * slack * segments * (o * cells_z + 1) + (o * under + 1) * o * rows
     dofs_per_node = 2 if scene.load.fourier_mode == 0 else 3
-    n = cells * spec.order**2 * dofs_per_node  # nodes per cell: 1 (Q4) or 4 (Q9)
+    n = nodes * dofs_per_node
     memory = _LU_BYTES_PER_UNKNOWN_LOG2 * n * math.log2(max(n, 2.0)) / 1e9
     seconds = _REF_SECONDS * (n / _REF_UNKNOWNS) ** 1.5
     near_r = min(spec.near_radius, radius) / spec.near_size
