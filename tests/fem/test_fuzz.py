@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from fem import simulate
@@ -110,6 +110,10 @@ def _check(base: str, changes: list[tuple[str, Any]], max_unknowns: float) -> No
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(cases(["harmonic", "static", "unit", "pogo"]))
+# found by this test: a deep unit scene whose mesh was 1 % above the estimate (rounding of the
+# graded segments, and the rows above the skin, were not counted)
+@example(("unit", [("tissue.layer.0.thickness_mm", 110.0)]))
+@example(("pogo", [("tissue.layer.0.thickness_mm", 72.3)]))
 def test_mutated_scenes_validate_and_solve_finite_or_raise_a_field_error(case):
     _check(*case, max_unknowns=20_000)
 
