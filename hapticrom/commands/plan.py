@@ -21,13 +21,18 @@ def _run(args: argparse.Namespace) -> int:
             check_output_file(f"--{opt}", getattr(args, opt))
     plan = plan_layout(load_layout(args.layout))
     req = plan.request
-    print(f"{req.rows} x {req.cols} {req.grid} array, leakage <= {req.criterion.max_ratio:g} of "
-          f"own amplitude ({req.criterion.superposition}), model {req.model}")
+    crit = req.criterion
+    limit = (f"leakage <= {crit.max_ratio:g} of own amplitude" if crit.kind == "ratio" else
+             f"leakage below the detection threshold ({crit.threshold.source}), drive level "
+             f"{crit.drive_level:g}")
+    print(f"{req.rows} x {req.cols} {req.grid} array, {limit} ({crit.superposition}), model "
+          f"{req.model}")
     for c in plan.candidates:
         pitch = "infeasible" if c.pitch_mm is None else (
             f"pitch {c.pitch_mm:6.2f} mm (edge to edge {c.edge_to_edge_mm:5.2f} mm; with the "
             f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
-        flag = " [extrapolated]" if c.extrapolated else ""
+        flag = (" [extrapolated]" if c.extrapolated else "") + (
+            "" if c.felt else " [own amplitude below the detection threshold]")
         print(f"  {c.name:22s} {c.frequency_hz:6.0f} Hz  center {c.center_um:6.2f} um  "
               f"{pitch}{flag}")
     if plan.best is None:
