@@ -33,6 +33,7 @@ import numpy as np
 
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
 from planner.layout import LayoutError, LayoutRequest
+from planner.timing import plan_timing
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
 
@@ -80,6 +81,7 @@ class Plan:
 
     loads: np.ndarray = field(default_factory=lambda: np.zeros(0))
     load_95: float | None = None  # worst load at the chosen pitch with the 95 % bound field
+    timing: dict[str, Any] | None = None  # planner.timing.plan_timing of the chosen unit
 
     @property
     def margin(self) -> float | None:
@@ -201,4 +203,6 @@ def plan_layout(req: LayoutRequest) -> Plan:
         result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
         result.loads = loads(result.crosstalk_um, req, best.frequency_hz)
         result.load_95 = worst_load(best.bound, req, best.pitch_mm, best.frequency_hz)
+        if req.timing.enabled:
+            result.timing = plan_timing(req, best)
     return result

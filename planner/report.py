@@ -55,6 +55,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "leakage_um": np.round(plan.leakage_um, 6).tolist(),
         "criterion_load": np.round(plan.loads, 6).tolist(),
         "uncertainty": None if best is None else uncertainty(plan),
+        "timing": plan.timing,
     }
 
 

@@ -40,6 +40,8 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(f"best: {plan.best.name} at {plan.best.frequency_hz:g} Hz, pitch "
               f"{plan.best.pitch_mm:.2f} mm, margin {plan.margin:.3f}")
+        _print_uncertainty(plan)
+        _print_timing(plan.timing)
     if args.out:
         with atomic_path(args.out) as tmp:
             tmp.write_text(json.dumps(plan_to_dict(plan), indent=1) + "\n")
@@ -49,6 +51,32 @@ def _run(args: argparse.Namespace) -> int:
             write_plan_plot(plan, tmp)
         print(f"wrote {args.plot}")
     return 0 if plan.best is not None else 1
+
+
+def _print_uncertainty(plan: object) -> None:
+    from planner.report import uncertainty
+
+    u = uncertainty(plan)
+    lo, hi = u["center_95_um"]
+    m95 = "inf" if u["margin_95"] is None else f"{u['margin_95']:.3f}"
+    print(f"  surrogate at the chosen design: center 95 % [{lo:.2f}, {hi:.2f}] um, profile "
+          f"log-std up to {u['profile_log_std_max']:.3f}; margin at the 95 % bounds {m95}"
+          f"{'' if u['criterion_holds_at_95'] else ' (criterion NOT met at the bounds)'}"
+          f"{' [extrapolated]' if u['extrapolated'] else ''}")
+
+
+def _print_timing(timing: dict | None) -> None:
+    if timing is None:
+        return
+    if timing.get("unavailable"):
+        print(f"  timing: unavailable ({timing['unavailable']})")
+        return
+    print(f"  timing ({timing['model']}): rise {timing['rise_ms']:.1f} ms, decay "
+          f"{timing['decay_ms']:.1f} ms, overdrive {timing['overdrive_ms']:.1f} ms at "
+          f"{timing['overdrive_voltage_V']:g} V (x{timing['overdrive_level']:.2f}; 90 % in "
+          f"{timing['rise_overdrive_ms']:.1f} ms instead of {timing['t90_ms']:.1f}), brake "
+          f"{timing['brake_ms']:.1f} ms, shortest inter-stimulus interval "
+          f"{timing['min_isi_ms']:.1f} ms")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
