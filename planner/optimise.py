@@ -61,6 +61,7 @@ class DesignResult:
     unit: UnitField | None = None  # the nominal amplitude field
     bound: UnitField | None = None  # the 95 % bound field (neighbours high, own low)
     felt: bool = True  # perceptual: own amplitude above the detection threshold
+    edge_um: float | None = None  # the surrogate's edge amplitude [um]
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -192,7 +193,8 @@ def plan_layout(req: LayoutRequest) -> Plan:
             float(s_c), float(s_p.max()),
             bool(out["extrapolated"][k]) if "extrapolated" in out else False,
             smallest_pitch(nominal, req, freq) if felt else None,
-            smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt))
+            smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
+            float(out["edge_amplitude_um"][k])))
     feasible = [r for r in results if r.pitch_mm is not None]
     best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
     result = Plan(req, results, best)
