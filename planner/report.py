@@ -103,15 +103,23 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
+    crit = plan.request.criterion
+    perceptual = crit.kind == "perceptual"
     for c in plan.candidates:
         f = c.unit
         r = np.linspace(f.edge_radius_mm, plan.request.max_pitch_mm, 300)
-        bx.semilogy(r, f.amplitude(r) / f.center_um, label=f"{c.name}, {c.frequency_hz:g} Hz")
-    crit = plan.request.criterion
-    if crit.kind == "ratio":
+        y = f.amplitude(r) * crit.drive_level if perceptual else f.amplitude(r) / f.center_um
+        line, = bx.semilogy(r, y, label=f"{c.name}, {c.frequency_hz:g} Hz")
+        if perceptual:
+            bx.axhline(float(crit.threshold(c.frequency_hz)), color=line.get_color(), ls=":",
+                       lw=1)
+    if perceptual:
+        bx.plot([], [], "k:", lw=1, label="detection threshold (dotted, per frequency)")
+        bx.set_ylabel(f"amplitude at drive level {crit.drive_level:g} [um]")
+    else:
         bx.axhline(crit.max_ratio, color="k", ls="--", lw=1, label="criterion (one neighbour)")
+        bx.set_ylabel("amplitude / own center amplitude")
     bx.set_xlabel("distance from unit centre [mm]")
-    bx.set_ylabel("amplitude / own center amplitude")
     bx.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
