@@ -39,7 +39,7 @@ def main() -> None:
         text = EXAMPLE.read_text().replace("rows = 4 ", f"rows = {n} ").replace(
             "cols = 4 ", f"cols = {n} ")
         if kind == "perceptual":
-            text = text.replace("max_ratio = 0.1 ", 'kind = "perceptual" #')
+            text = text.replace('kind = "ratio"', 'kind = "perceptual"')
         with tempfile.TemporaryDirectory() as tmp:
             layout = Path(tmp) / "layout.toml"
             layout.write_text(text)
