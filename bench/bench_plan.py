@@ -3,13 +3,17 @@
     .venv/bin/python bench/bench_plan.py [--repeat 5]
 
 Uses examples/forearm-layout.toml (3 designs x 3 frequencies on the shipped nn-default) with
-the array size replaced; prints medians. The command includes interpreter start-up and
-imports, which is what a user waits for.
+the array size replaced, under the ratio criterion and the perceptual one (detection
+threshold, planner.threshold); prints medians. The command (``python -m hapticrom.cli plan``,
+this checkout's code) includes interpreter start-up, imports and the envelope timing of the
+chosen unit on the transient ROM (when its frequency is within the motor's drive limit),
+which is what a user waits for.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import statistics
 import subprocess
 import sys
@@ -29,19 +33,21 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
-    hapticrom = Path(sys.executable).with_name("hapticrom")
-    print(f"{'array':6s} {'command s':>10s} {'plan_layout s':>14s} {'pitch mm':>9s}")
-    for n in (4, 8):
+    print(f"{'criterion':10s} {'array':6s} {'command s':>10s} {'plan_layout s':>14s} "
+          f"{'pitch mm':>9s} {'timing':>7s}")
+    for kind, n in itertools.product(("ratio", "perceptual"), (4, 8)):
         text = EXAMPLE.read_text().replace("rows = 4 ", f"rows = {n} ").replace(
             "cols = 4 ", f"cols = {n} ")
+        if kind == "perceptual":
+            text = text.replace('kind = "ratio"', 'kind = "perceptual"')
         with tempfile.TemporaryDirectory() as tmp:
             layout = Path(tmp) / "layout.toml"
             layout.write_text(text)
             runs = []
             for _ in range(args.repeat):
                 t0 = time.perf_counter()
-                subprocess.run([str(hapticrom), "plan", str(layout)], cwd=ROOT, check=True,
-                               capture_output=True)
+                subprocess.run([sys.executable, "-m", "hapticrom.cli", "plan", str(layout)],
+                               cwd=ROOT, check=True, capture_output=True)
                 runs.append(time.perf_counter() - t0)
         req = layout_from_dict(tomllib.loads(text))
         inproc = []
@@ -49,8 +55,9 @@ def main() -> None:
             t0 = time.perf_counter()
             plan = plan_layout(req)
             inproc.append(time.perf_counter() - t0)
-        print(f"{n}x{n:<4d} {statistics.median(runs):10.2f} {statistics.median(inproc):14.3f} "
-              f"{plan.best.pitch_mm:9.2f}")
+        timed = "no" if plan.timing is None or plan.timing.get("unavailable") else "yes"
+        print(f"{kind:10s} {n}x{n:<4d} {statistics.median(runs):10.2f} "
+              f"{statistics.median(inproc):14.3f} {plan.best.pitch_mm:9.2f} {timed:>7s}")
 
 
 if __name__ == "__main__":

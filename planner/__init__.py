@@ -10,20 +10,28 @@ from planner.drive import DriveSolution, drive_levels
 from planner.layout import LayoutError, LayoutRequest, layout_from_dict, load_layout
 from planner.optimise import DesignResult, Plan, plan_layout
 from planner.report import plan_to_dict, write_plan_plot
+from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
+from planner.timing import Timing, TimingError, envelope_timing, plan_timing
 
 __all__ = [
+           "VERRILLO_1966_FOREARM",
            "DesignResult",
            "DriveSolution",
            "LayoutError",
            "LayoutRequest",
            "Plan",
+           "ThresholdCurve",
+           "Timing",
+           "TimingError",
            "UnitField",
            "crosstalk_matrix",
            "drive_levels",
+           "envelope_timing",
            "layout_from_dict",
            "leakage_ratio",
            "load_layout",
            "plan_layout",
+           "plan_timing",
            "plan_to_dict",
            "site_positions",
            "write_plan_plot",

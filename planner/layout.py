@@ -20,8 +20,19 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     frequencies_hz = [120.0]        # drive frequencies tried (the best one is kept per design)
 
     [criterion]
-    max_ratio = 0.1                 # leakage at a site / the site's own amplitude, at most
+    kind = "ratio"                  # "ratio" | "perceptual" (leakage below the detection
+                                    # threshold at the drive frequency, planner.threshold)
+    max_ratio = 0.1                 # ratio: leakage at a site / its own amplitude, at most
     superposition = "incoherent"    # "incoherent" (independent ERMs: powers add) | "worst"
+    drive_level = 1.0               # perceptual: running amplitude / the surrogate's (nominal)
+    # threshold_hz, threshold_um, threshold_source: perceptual: a threshold table of one's own
+    # contactor_area_cm2: perceptual: rescale the curve to this contact area (3 dB / doubling)
+
+    [timing]                        # the envelope timing of the chosen unit (planner.timing)
+    model = "models/rom-default"    # the transient ROM; enabled = false skips the timing
+    tau_spinup_ms = 20.0            # motor time constants (fem.motor estimates)
+    tau_spindown_ms = 35.0
+    isi_fraction = 0.1              # ratio criterion: residual below this of steady for the ISI
 
     [[design]]                      # candidate unit designs: model inputs by name
     name = "optimised"
@@ -40,11 +51,14 @@ from pathlib import Path
 from typing import Any
 
 from fieldspec import REQUIRED, Context, FieldError, Spec, read_array, read_table, require_table
+from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
-__all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "layout_from_dict", "load_layout"]
+__all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
+           "load_layout"]
 
 GRIDS = ("square", "hex")
 SUPERPOSITIONS = ("incoherent", "worst")
+KINDS = ("ratio", "perceptual")
 MAX_SITES_PER_SIDE = 32
 
 
@@ -54,10 +68,27 @@ class LayoutError(FieldError):
 
 @dataclass(frozen=True)
 class CriterionSpec:
-    """Crosstalk criterion: leakage at a site at most ``max_ratio`` of its own amplitude."""
+    """Crosstalk criterion. ``ratio``: leakage at a site at most ``max_ratio`` of its own
+    amplitude. ``perceptual``: leakage (at ``drive_level`` times the surrogate's amplitude)
+    below the detection threshold at the drive frequency, and the site's own amplitude above
+    it."""
 
     max_ratio: float
     superposition: str
+    kind: str = "ratio"
+    drive_level: float = 1.0
+    threshold: ThresholdCurve | None = None  # perceptual only
+
+
+@dataclass(frozen=True)
+class TimingSpec:
+    """Envelope timing request (see :mod:`planner.timing`); times in ms as in the file."""
+
+    enabled: bool = True
+    model: str = "models/rom-default"
+    tau_spinup_ms: float = 20.0
+    tau_spindown_ms: float = 35.0
+    isi_fraction: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -75,6 +106,7 @@ class LayoutRequest:
     criterion: CriterionSpec
     designs: tuple[dict[str, Any], ...]
     allow_extrapolation: bool = False
+    timing: TimingSpec = TimingSpec()
 
 
 _MODEL = {"path": Spec(str, "models/nn-default"),
@@ -85,9 +117,22 @@ _ARRAY = {"rows": Spec(int, REQUIRED, f"[1, {MAX_SITES_PER_SIDE}]"),
           "min_pitch_mm": Spec(float, 2.0, "(0, 500]"),
           "max_pitch_mm": Spec(float, 100.0, "[array.min_pitch_mm, 1000]")}
 _DRIVE = {"frequencies_hz": Spec(tuple, (120.0,), "(0, 1e4]")}
-_CRITERION = {"max_ratio": Spec(float, 0.1, "(0, 1]"),
-              "superposition": Spec(str, "incoherent", choices=SUPERPOSITIONS)}
-_TABLES = ("model", "array", "site", "drive", "criterion", "design")
+_CRITERION = {"kind": Spec(str, "ratio", choices=KINDS),
+              "max_ratio": Spec(float, 0.1, "(0, 1]"),
+              "superposition": Spec(str, "incoherent", choices=SUPERPOSITIONS),
+              "drive_level": Spec(float, 1.0, "(0, 10]"),
+              "threshold_hz": Spec(tuple, None, "(0, 1e4]"),
+              "threshold_um": Spec(tuple, None, "(0, 1e4]"),
+              "threshold_source": Spec(str, None),
+              "contactor_area_cm2": Spec(float, None, "(0, 100]")}
+# motor time constants: the fem.motor estimates (coin ERMs lag 10-20 ms, stop in 50-150 ms);
+# isi_fraction 0.1: the 10 % level that also ends the 90-10 % decay time
+_TIMING = {"enabled": Spec(bool, True),
+           "model": Spec(str, "models/rom-default"),
+           "tau_spinup_ms": Spec(float, 20.0, "(0, 1000]"),
+           "tau_spindown_ms": Spec(float, 35.0, "(0, 1000]"),
+           "isi_fraction": Spec(float, 0.1, "(0, 1)")}
+_TABLES = ("model", "array", "site", "drive", "criterion", "timing", "design")
 
 
 def _inputs(raw: Any, path: str, ctx: Context) -> dict[str, Any]:
@@ -108,6 +153,42 @@ def _design(raw: Any, path: str, i: int, ctx: Context) -> dict[str, Any]:
     return {"name": name, "inputs": d}
 
 
+def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
+    """The criterion table's values as a :class:`CriterionSpec` (the threshold curve checked
+    against the drive frequencies)."""
+    table = [c["threshold_hz"], c["threshold_um"], c["threshold_source"]]
+    given = [x is not None for x in table]
+    names = ("threshold_hz", "threshold_um", "threshold_source")
+    if any(given) and not all(given):
+        missing = names[given.index(False)]
+        raise LayoutError(f"criterion.{missing}", f"criterion.{missing} is missing: a threshold "
+                          "table needs threshold_hz, threshold_um and threshold_source")
+    if c["kind"] == "ratio":
+        extra = [k for k in (*names, "contactor_area_cm2") if c[k] is not None]
+        if extra:
+            raise LayoutError(f"criterion.{extra[0]}", f"criterion.{extra[0]}: only for "
+                              'criterion.kind = "perceptual"')
+        return CriterionSpec(c["max_ratio"], c["superposition"], "ratio", c["drive_level"])
+    curve = VERRILLO_1966_FOREARM
+    if all(given):
+        try:
+            curve = ThresholdCurve(table[0], table[1], table[2], contactor_area_cm2=None)
+        except ValueError as err:
+            raise LayoutError("criterion.threshold_hz", f"criterion: {err}") from None
+    if c["contactor_area_cm2"] is not None:
+        if curve.contactor_area_cm2 is None:
+            raise LayoutError("criterion.contactor_area_cm2", "criterion.contactor_area_cm2: "
+                              "a threshold table of one's own has no reference area to rescale")
+        curve = curve.at_area(c["contactor_area_cm2"])
+    lo, hi = curve.range_hz
+    bad = [f for f in freqs if not lo <= f <= hi]
+    if bad:
+        raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {bad[0]:g} Hz is "
+                          f"outside the threshold curve's range [{lo:g}, {hi:g}] Hz")
+    return CriterionSpec(c["max_ratio"], c["superposition"], "perceptual", c["drive_level"],
+                         curve)
+
+
 def layout_from_dict(d: Any) -> LayoutRequest:
     """Validate a TOML-shaped mapping; raises :class:`LayoutError` naming the field."""
     ctx = Context(LayoutError)
@@ -116,6 +197,7 @@ def layout_from_dict(d: Any) -> LayoutRequest:
     array = read_table(d.get("array", {}), _ARRAY, "array", ctx)
     drive = read_table(d.get("drive", {}), _DRIVE, "drive", ctx)
     criterion = read_table(d.get("criterion", {}), _CRITERION, "criterion", ctx)
+    timing = read_table(d.get("timing", {}), _TIMING, "timing", ctx)
     site = _inputs(d.get("site", {}), "site", ctx)
     if "design" not in d:
         raise LayoutError("design", "design is missing: give at least one [[design]] table "
@@ -138,8 +220,8 @@ def layout_from_dict(d: Any) -> LayoutRequest:
     return LayoutRequest(model["path"], array["rows"], array["cols"], array["grid"],
                          array["min_pitch_mm"], array["max_pitch_mm"], site,
                          tuple(drive["frequencies_hz"]),
-                         CriterionSpec(criterion["max_ratio"], criterion["superposition"]),
-                         tuple(designs), model["allow_extrapolation"])
+                         _criterion(criterion, tuple(drive["frequencies_hz"])),
+                         tuple(designs), model["allow_extrapolation"], TimingSpec(**timing))
 
 
 def load_layout(path: str | Path) -> LayoutRequest:

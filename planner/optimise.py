@@ -7,6 +7,20 @@ smallest feasible pitch is found by bisection to ``PITCH_TOL_MM``. Units may not
 pitch is at least two edge radii. The surrogate's uncertainty is carried through as a second,
 conservative pitch: the leakage of the upper 95 % bound of the neighbours' amplitudes against
 the lower bound of the site's own (log-normal, 1.96 sigma).
+
+Criteria (:class:`planner.layout.CriterionSpec`): the *load* of a site is its leakage over
+what the criterion allows, so a pitch is feasible when every load is <= 1 and the margin is
+1 / the largest load. ``ratio``: leakage / own amplitude / max_ratio. ``perceptual``:
+drive_level x leakage [um] / the detection threshold at the drive frequency
+(:mod:`planner.threshold`); a unit whose own amplitude is below the threshold is infeasible
+(it would not be felt). The surrogate's amplitudes are absolute: the nominal coin ERM of the
+training scenes (fem defaults, unbalance 0.006 g mm) spinning at the drive frequency, so the
+force grows with the frequency squared; drive_level scales them linearly (another unbalance,
+or a linear actuator at that frequency).
+
+Only identical units on a regular grid are planned: mixed designs or positions would need a
+search over assignments (the leakage then differs per site), and "any design within the
+model's range" a continuous inner optimisation over the inputs; neither is offered yet.
 """
 
 from __future__ import annotations
@@ -19,10 +33,12 @@ import numpy as np
 
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
 from planner.layout import LayoutError, LayoutRequest
+from planner.timing import plan_timing
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
 
-__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "plan_layout"]
+__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "loads", "plan_layout", "smallest_pitch",
+           "worst_load"]
 
 PITCH_TOL_MM = 0.01
 Z95 = 1.959964
@@ -43,6 +59,9 @@ class DesignResult:
     pitch_mm: float | None  # None: infeasible within the pitch bounds
     pitch_95_mm: float | None  # with the surrogate's 95 % bounds
     unit: UnitField | None = None  # the nominal amplitude field
+    bound: UnitField | None = None  # the 95 % bound field (neighbours high, own low)
+    felt: bool = True  # perceptual: own amplitude above the detection threshold
+    edge_um: float | None = None  # the surrogate's edge amplitude [um]
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -61,34 +80,73 @@ class Plan:
     crosstalk_um: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     ratios: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
+    loads: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    load_95: float | None = None  # worst load at the chosen pitch with the 95 % bound field
+    timing: dict[str, Any] | None = None  # planner.timing.plan_timing of the chosen unit
+
     @property
     def margin(self) -> float | None:
-        """max_ratio / worst ratio at the chosen pitch (>= 1: the criterion holds)."""
-        if self.best is None or not self.ratios.size:
+        """1 / the worst load at the chosen pitch (>= 1: the criterion holds)."""
+        if self.best is None or not self.loads.size:
             return None
-        return float(self.request.criterion.max_ratio / self.ratios.max())
+        worst = float(self.loads.max())
+        return float("inf") if worst == 0 else 1.0 / worst
+
+    @property
+    def leakage_um(self) -> np.ndarray:
+        """Leakage amplitude at every site [um] at the criterion's drive level."""
+        if not self.crosstalk_um.size:
+            return np.zeros(0)
+        C = self.crosstalk_um
+        return self.ratios * np.diag(C) * self.request.criterion.drive_level
 
 
 def worst_ratio(f: UnitField, req: LayoutRequest, pitch_mm: float) -> float:
+    """Largest leakage / own amplitude over the sites at ``pitch_mm``."""
     pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
     if len(pos) < 2:
         return 0.0
     return float(leakage_ratio(crosstalk_matrix(f, pos), req.criterion.superposition).max())
 
 
-def smallest_pitch(f: UnitField, req: LayoutRequest) -> float | None:
-    """Smallest pitch in the request's bounds (and >= 2 edge radii) meeting the criterion."""
+def loads(C: np.ndarray, req: LayoutRequest, frequency_hz: float) -> np.ndarray:
+    """Per site: leakage over what the criterion allows (<= 1: the site meets it)."""
+    crit = req.criterion
+    ratios = leakage_ratio(C, crit.superposition)
+    if crit.kind == "ratio":
+        return ratios / crit.max_ratio
+    threshold = float(crit.threshold(frequency_hz))
+    return ratios * np.diag(C) * crit.drive_level / threshold
+
+
+def worst_load(f: UnitField, req: LayoutRequest, pitch_mm: float, frequency_hz: float) -> float:
+    """Largest site load of the array at ``pitch_mm`` (0 for a single site)."""
+    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    if len(pos) < 2:
+        return 0.0
+    return float(loads(crosstalk_matrix(f, pos), req, frequency_hz).max())
+
+
+def smallest_pitch(f: UnitField, req: LayoutRequest, frequency_hz: float = 0.0) -> float | None:
+    """Smallest pitch in the request's bounds (and >= 2 edge radii) meeting the criterion
+    (``frequency_hz`` sets the threshold of the perceptual one)."""
     lo = max(req.min_pitch_mm, 2 * f.edge_radius_mm)
     hi = req.max_pitch_mm
-    limit = req.criterion.max_ratio
-    if lo > hi or worst_ratio(f, req, hi) > limit:
+    if lo > hi or worst_load(f, req, hi, frequency_hz) > 1.0:
         return None
-    if worst_ratio(f, req, lo) <= limit:
+    if worst_load(f, req, lo, frequency_hz) <= 1.0:
         return lo
     while hi - lo > PITCH_TOL_MM:
         mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if worst_ratio(f, req, mid) <= limit else (mid, hi)
+        lo, hi = (lo, mid) if worst_load(f, req, mid, frequency_hz) <= 1.0 else (mid, hi)
     return hi
+
+
+def is_felt(center_um: float, req: LayoutRequest, frequency_hz: float) -> bool:
+    """Perceptual criterion: whether the unit's own amplitude reaches the threshold."""
+    crit = req.criterion
+    return crit.kind != "perceptual" or \
+        center_um * crit.drive_level >= float(crit.threshold(frequency_hz))
 
 
 def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[str, Any]]:
@@ -129,11 +187,14 @@ def plan_layout(req: LayoutRequest) -> Plan:
         nominal = UnitField(float(center), edge, grid, profile)
         bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
                           profile * np.exp(Z95 * s_p))
+        felt = is_felt(float(center), req, float(freq))
         results.append(DesignResult(
             design["name"], float(freq), dict(design["inputs"]), float(center), edge,
             float(s_c), float(s_p.max()),
             bool(out["extrapolated"][k]) if "extrapolated" in out else False,
-            smallest_pitch(nominal, req), smallest_pitch(bound, req), nominal))
+            smallest_pitch(nominal, req, freq) if felt else None,
+            smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
+            float(out["edge_amplitude_um"][k])))
     feasible = [r for r in results if r.pitch_mm is not None]
     best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
     result = Plan(req, results, best)
@@ -142,4 +203,8 @@ def plan_layout(req: LayoutRequest) -> Plan:
         result.positions_mm = site_positions(req.rows, req.cols, best.pitch_mm, req.grid)
         result.crosstalk_um = crosstalk_matrix(f, result.positions_mm)
         result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
+        result.loads = loads(result.crosstalk_um, req, best.frequency_hz)
+        result.load_95 = worst_load(best.bound, req, best.pitch_mm, best.frequency_hz)
+        if req.timing.enabled:
+            result.timing = plan_timing(req, best)
     return result

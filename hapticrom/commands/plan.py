@@ -1,12 +1,21 @@
 """``hapticrom plan LAYOUT.toml``: lay out an array on the shipped surrogate.
 
     hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
+    hapticrom plan examples/forearm-layout.toml --verify     # re-solve the winner with FE
+
+``--verify`` builds the winning design's scene exactly as the model's training data did (the
+dataset's own parameter space maps model inputs to a scene, ``Space.resolve``; inputs the
+model does not take keep the space's centre values, as the fixed ones do), solves it with the
+FE solver (``surrogate.data.worker.run_sample``, the dataset's mesh settings) and compares
+centre and edge amplitude, and the pitch each profile implies under the same criterion.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
+from typing import Any
 
 from hapticrom.outputs import atomic_path, check_output_file
 
@@ -20,14 +29,20 @@ def _run(args: argparse.Namespace) -> int:
         if getattr(args, opt):
             check_output_file(f"--{opt}", getattr(args, opt))
     plan = plan_layout(load_layout(args.layout))
+    verify = _verify(plan) if args.verify and plan.best is not None else None
     req = plan.request
-    print(f"{req.rows} x {req.cols} {req.grid} array, leakage <= {req.criterion.max_ratio:g} of "
-          f"own amplitude ({req.criterion.superposition}), model {req.model}")
+    crit = req.criterion
+    limit = (f"leakage <= {crit.max_ratio:g} of own amplitude" if crit.kind == "ratio" else
+             f"leakage below the detection threshold ({crit.threshold.source}), drive level "
+             f"{crit.drive_level:g}")
+    print(f"{req.rows} x {req.cols} {req.grid} array, {limit} ({crit.superposition}), model "
+          f"{req.model}")
     for c in plan.candidates:
         pitch = "infeasible" if c.pitch_mm is None else (
             f"pitch {c.pitch_mm:6.2f} mm (edge to edge {c.edge_to_edge_mm:5.2f} mm; with the "
             f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
-        flag = " [extrapolated]" if c.extrapolated else ""
+        flag = (" [extrapolated]" if c.extrapolated else "") + (
+            "" if c.felt else " [own amplitude below the detection threshold]")
         print(f"  {c.name:22s} {c.frequency_hz:6.0f} Hz  center {c.center_um:6.2f} um  "
               f"{pitch}{flag}")
     if plan.best is None:
@@ -35,9 +50,16 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(f"best: {plan.best.name} at {plan.best.frequency_hz:g} Hz, pitch "
               f"{plan.best.pitch_mm:.2f} mm, margin {plan.margin:.3f}")
+        _print_uncertainty(plan)
+        _print_timing(plan.timing)
+    if verify is not None:
+        _print_verify(verify)
     if args.out:
+        doc = plan_to_dict(plan)
+        if args.verify:
+            doc["verify"] = verify
         with atomic_path(args.out) as tmp:
-            tmp.write_text(json.dumps(plan_to_dict(plan), indent=1) + "\n")
+            tmp.write_text(json.dumps(doc, indent=1) + "\n")
         print(f"wrote {args.out}")
     if args.plot:
         with atomic_path(args.plot) as tmp:
@@ -46,10 +68,100 @@ def _run(args: argparse.Namespace) -> int:
     return 0 if plan.best is not None else 1
 
 
+def _dataset_path(model: str) -> Path:
+    """The model's training dataset (the card's path, relative to the working directory or
+    to the repository holding ``models/NAME``)."""
+    from surrogate.runtime.card import read_card
+
+    card = read_card(model)
+    rel = Path(card["training_data"][0]["path"])
+    for base in (Path.cwd(), Path(model).resolve().parents[1]):
+        if (base / rel).is_dir():
+            return base / rel
+    raise FileNotFoundError(f"--verify: the model's training dataset {str(rel)!r} was not found "
+                       "(its parameter space builds the FE scene)")
+
+
+def _verify(plan: Any) -> dict[str, Any]:
+    """FE re-solve of the chosen design; surrogate vs FE amplitudes and implied pitches."""
+    import numpy as np
+
+    from planner.crosstalk import UnitField
+    from planner.optimise import smallest_pitch, worst_load
+    from surrogate.data.store import Store
+    from surrogate.data.worker import run_sample
+
+    req, best = plan.request, plan.best
+    space = Store.open(_dataset_path(req.model)).space
+    row = {**space.center(), **req.site, **best.inputs, "frequency_hz": best.frequency_hz}
+    out = run_sample(space.resolve(row))
+    if out["status"] != "ok":
+        raise RuntimeError(f"--verify: the FE solve failed: {out['error']}")
+    fe = UnitField(float(out["center_amplitude_um"]), float(out["edge_radius_mm"]),
+                   np.asarray(out["profile_distance_mm"], dtype=float),
+                   np.maximum(np.asarray(out["profile_magnitude_um"], dtype=float), 1e-12))
+    fe_pitch = smallest_pitch(fe, req, best.frequency_hz)
+    return {
+        "design": best.name, "frequency_hz": best.frequency_hz,
+        "surrogate": {"center_um": round(best.center_um, 4),
+                      "edge_um": round(best.edge_um, 4),
+                      "pitch_mm": round(best.pitch_mm, 3)},
+        "fe": {"center_um": round(fe.center_um, 4),
+               "edge_um": round(float(out["edge_amplitude_um"]), 4),
+               "pitch_mm": None if fe_pitch is None else round(fe_pitch, 3),
+               "criterion_load_at_plan_pitch": round(
+                   worst_load(fe, req, best.pitch_mm, best.frequency_hz), 4),
+               "dofs": int(out["dofs"]), "wall_s": round(float(out["wall_s"]), 2)},
+        "scene_inputs": {k: row[k] for k in sorted(row)},
+    }
+
+
+def _print_verify(v: dict[str, Any]) -> None:
+    s, f = v["surrogate"], v["fe"]
+    fe_pitch = "infeasible" if f["pitch_mm"] is None else f"{f['pitch_mm']:.2f} mm"
+    print(f"verify ({v['design']} at {v['frequency_hz']:g} Hz, FE {f['dofs']} dofs, "
+          f"{f['wall_s']:.1f} s):")
+    print(f"  center  surrogate {s['center_um']:7.3f} um   FE {f['center_um']:7.3f} um "
+          f"({s['center_um'] / f['center_um'] - 1:+.1%})")
+    print(f"  edge    surrogate {s['edge_um']:7.3f} um   FE {f['edge_um']:7.3f} um "
+          f"({s['edge_um'] / f['edge_um'] - 1:+.1%})")
+    print(f"  pitch   surrogate {s['pitch_mm']:7.2f} mm   FE {fe_pitch} (FE criterion load at "
+          f"the planned pitch {f['criterion_load_at_plan_pitch']:.3f}; <= 1: it holds)")
+
+
+def _print_uncertainty(plan: object) -> None:
+    from planner.report import uncertainty
+
+    u = uncertainty(plan)
+    lo, hi = u["center_95_um"]
+    m95 = "inf" if u["margin_95"] is None else f"{u['margin_95']:.3f}"
+    print(f"  surrogate at the chosen design: center 95 % [{lo:.2f}, {hi:.2f}] um, profile "
+          f"log-std up to {u['profile_log_std_max']:.3f}; margin at the 95 % bounds {m95}"
+          f"{'' if u['criterion_holds_at_95'] else ' (criterion NOT met at the bounds)'}"
+          f"{' [extrapolated]' if u['extrapolated'] else ''}")
+
+
+def _print_timing(timing: dict | None) -> None:
+    if timing is None:
+        return
+    if timing.get("unavailable"):
+        print(f"  timing: unavailable ({timing['unavailable']})")
+        return
+    print(f"  timing ({timing['model']}): rise {timing['rise_ms']:.1f} ms, decay "
+          f"{timing['decay_ms']:.1f} ms, overdrive {timing['overdrive_ms']:.1f} ms at "
+          f"{timing['overdrive_voltage_V']:g} V (x{timing['overdrive_level']:.2f}; 90 % in "
+          f"{timing['rise_overdrive_ms']:.1f} ms instead of {timing['t90_ms']:.1f}), brake "
+          f"{timing['brake_ms']:.1f} ms, shortest inter-stimulus interval "
+          f"{timing['min_isi_ms']:.1f} ms")
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``plan`` subcommand."""
     p = subparsers.add_parser("plan", help="lay out a haptic array on the surrogate")
     p.add_argument("layout", help="layout request TOML (see examples/forearm-layout.toml)")
     p.add_argument("--out", metavar="JSON", help="write the plan as JSON")
     p.add_argument("--plot", metavar="PNG", help="write the layout and profiles figure")
+    p.add_argument("--verify", action="store_true",
+                   help="re-solve the winning design with the FE solver (about a second) and "
+                   "compare it with the surrogate (written into the plan under 'verify')")
     p.set_defaults(func=_run)

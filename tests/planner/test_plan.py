@@ -102,3 +102,50 @@ def test_planning_imports_neither_torch_nor_sklearn_nor_the_solver():
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
                           text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_cli_verify_re_solves_the_winner_with_fe(tmp_path, capsys):
+    """--verify: one FE solve (about a second) of the chosen design, written under "verify";
+    the surrogate should be within its stated accuracy (p95 error ~15-20 %) of the FE."""
+    layout = tmp_path / "layout.toml"
+    layout.write_text(EXAMPLE.read_text().replace('"models/nn-default"',
+                                                  repr(str(ROOT / "models" / "nn-default")))
+                      .replace("rows = 4", "rows = 1").replace("cols = 4", "cols = 2")
+                      .replace("[120.0, 180.0, 240.0]", "[120.0]"))
+    out = tmp_path / "plan.json"
+    assert main(["plan", str(layout), "--verify", "--out", str(out)]) == 0
+    assert "verify (" in capsys.readouterr().out
+    v = json.loads(out.read_text())["verify"]
+    s, fe = v["surrogate"], v["fe"]
+    assert v["design"] == json.loads(out.read_text())["best"] and fe["dofs"] > 1000
+    assert fe["center_um"] == pytest.approx(s["center_um"], rel=0.3)
+    assert fe["edge_um"] == pytest.approx(s["edge_um"], rel=0.3)
+    assert fe["pitch_mm"] is not None and fe["pitch_mm"] == pytest.approx(s["pitch_mm"], rel=0.3)
+    # the FE pitch meets the criterion on the FE profile, by construction of the same search
+    assert (fe["criterion_load_at_plan_pitch"] <= 1.0) == (fe["pitch_mm"] <= s["pitch_mm"])
+
+
+def test_cli_perceptual_plan_has_threshold_uncertainty_and_timing(tmp_path):
+    layout = tmp_path / "layout.toml"
+    layout.write_text(EXAMPLE.read_text().replace('"models/nn-default"',
+                                                  repr(str(ROOT / "models" / "nn-default")))
+                      .replace('kind = "ratio"', 'kind = "perceptual"')
+                      .replace("[120.0, 180.0, 240.0]", "[120.0, 160.0]")
+                      .replace('"models/rom-default"', repr(str(ROOT / "models" / "rom-default"))))
+    out = tmp_path / "plan.json"
+    assert main(["plan", str(layout), "--out", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    crit = doc["criterion"]
+    assert crit["kind"] == "perceptual" and "Verrillo 1966" in crit["threshold"]["source"]
+    assert max(doc["leakage_um"]) <= crit["threshold"]["at_best_frequency_um"] * (1 + 1e-9)
+    assert max(doc["criterion_load"]) <= 1.0 and doc["margin"] >= 1.0
+    u = doc["uncertainty"]
+    best = next(c for c in doc["candidates"] if c["name"] == doc["best"]
+                and c["frequency_hz"] == doc["best_frequency_hz"])
+    assert u["center_95_um"][0] < best["center_um"] < u["center_95_um"][1]
+    assert u["center_log_std"] > 0 and u["extrapolated"] is False
+    assert (u["margin_95"] >= 1.0) == u["criterion_holds_at_95"]
+    t = doc["timing"]
+    assert set(t) >= {"rise_ms", "decay_ms", "overdrive_ms", "overdrive_level", "brake_ms",
+                      "min_isi_ms"}
+    assert t.get("unavailable") is None and 0 < t["rise_ms"] and t["overdrive_level"] > 1
