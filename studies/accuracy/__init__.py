@@ -1,0 +1,1 @@
+"""What accuracy costs in time (filled in below)."""
