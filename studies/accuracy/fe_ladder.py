@@ -129,16 +129,26 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
                    grid_mm: np.ndarray) -> list[dict[str, Any]]:
     """The transient steady state against the harmonic answer on the same mesh (order
     :data:`TRANSIENT`, default sizes) and against the reference; center and edge only (the
-    profile of a transient run is a peak over the whole run, spin-up included)."""
-    same, total, times, h_times, dofs = [], [], [], [], []
+    profile of a transient run is a peak over the whole run, spin-up included). Designs the
+    solver refuses to run in time (a bare unit on frictionless pins has nothing holding it
+    sideways) are counted in ``refused``; no row at all when every design is refused."""
+    from fem import SceneError
+
+    same, total, times, h_times, dofs, refused = [], [], [], [], [], 0
     for des, ref in zip(designs, refs, strict=True):
-        a, t, n = transient_answer(des.scene)
+        try:
+            a, t, n = transient_answer(des.scene)
+        except (SceneError, ValueError):  # e.g. a bare unit on pins drifts away in time
+            refused += 1
+            continue
         h, th, _ = solve(scene_at(des.scene, None, TRANSIENT["order"]), grid_mm, 1)
         same.append(_scalar_errors(a, h))
         total.append(_scalar_errors(a, ref))
         times.append(t)
         h_times.append(th)
         dofs.append(n)
+    if not total:
+        return []
     med = {k: float(np.median([e[k] for e in total])) for k in ("center", "edge", "worst")}
     mx = {k: float(np.max([e[k] for e in total])) for k in ("center", "edge", "worst")}
     vs = {k: float(np.max([e[k] for e in same])) for k in ("center", "edge")}
@@ -149,7 +159,8 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
              **{f"{k}_median": v for k, v in med.items()},
              **{f"{k}_max": v for k, v in mx.items()},
              "profile_median": float("nan"), "profile_max": float("nan"),
-             "vs_harmonic_center_max": vs["center"], "vs_harmonic_edge_max": vs["edge"]}]
+             "vs_harmonic_center_max": vs["center"], "vs_harmonic_edge_max": vs["edge"],
+             "designs": len(total), "refused": refused}]
 
 
 def _scalar_errors(a: Answer, ref: Answer) -> dict[str, float]:
