@@ -108,7 +108,6 @@ def transient_answer(scene: dict[str, Any], repeat: int = 1) -> tuple[Answer, fl
     motor = unit.setdefault("motor", {})
     motor["rated_frequency_hz"] = f
     from fem.scene.model import Analysis  # defaults only
-
     from fem.scene.unit_model import Motor
 
     volts = motor.get("rated_voltage_V", Motor.__dataclass_fields__["rated_voltage_V"].default)

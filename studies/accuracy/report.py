@@ -134,7 +134,7 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
         L.append(f"- {kind.upper()}: 1 % median held-out error needs {txt}.")
     L += ["", "## Error metric", "", METRIC_DOC.strip().split("\n\n", 1)[1].strip(), "",
           "The reference is the FE solver with quadratic elements at "
-          f"{s.ref_level:.3g} x the default element sizes (median {sorted(res['ref_dofs'])[len(res['ref_dofs']) // 2]} "
+          f"{s.ref_level:.3g} x the default element sizes (median {_median_int(res['ref_dofs'])} "
           "unknowns). Learned models are measured against that reference on the same designs "
           "(their error therefore includes the discretisation error of the data they learned "
           "from), and on the dataset's held-out rows for the learning curves.", ""]
@@ -205,6 +205,10 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
                      "n/a | n/a | n/a | n/a |")
     L += ["", "## Machine", ""] + [f"- {k}: {v}" for k, v in machine().items()] + [""]
     return "\n".join(L)
+
+
+def _median_int(values: list[int]) -> int:
+    return sorted(values)[len(values) // 2]
 
 
 def _fmt(v: Any) -> str:
