@@ -49,7 +49,7 @@ bench: $(STAMP)
 
 # What accuracy costs in time: writes docs/accuracy-vs-time.md and .png (about 10 minutes).
 bench-accuracy: $(STAMP)
-	$(BIN)/python -m hapticrom.cli bench accuracy --out docs/accuracy-vs-time.md
+	$(BIN)/hapticrom bench accuracy --out docs/accuracy-vs-time.md
 
 clean:
 	rm -rf $(VENV) out
