@@ -95,11 +95,13 @@ def fe_ladder(designs: Sequence[Design], refs: Sequence[Answer], grid_mm: np.nda
     return rows
 
 
-def transient_answer(scene: dict[str, Any], repeat: int = 1) -> tuple[Answer, float, int]:
+def transient_answer(scene: dict[str, Any],
+                     repeat: int = 1) -> tuple[Answer, float, int, float]:
     """Steady center and edge amplitudes of the scene's ERM run in time (motor at its rated
     voltage with the rated speed set to the design's frequency, instant spin-up), from the
     per-component peaks over the last :data:`TRANSIENT` window; (answer with an empty
-    profile, median wall time [s], unknowns)."""
+    profile, median wall time [s], unknowns, unsettled = largest relative change of the
+    center and edge peaks from the window before the last to the last)."""
     from fem import scene_from_dict, simulate
 
     d = scene_at(scene, None, TRANSIENT["order"])
@@ -119,10 +121,18 @@ def transient_answer(scene: dict[str, Any], repeat: int = 1) -> tuple[Answer, fl
     res, t = timed(lambda: simulate(sc), repeat)
     h = res.histories
     start = (TRANSIENT["duration_ms"] - TRANSIENT["window_ms"]) * 1e-3
-    amp = h.amplitude(start=start - 1e-12) * 1e6  # (points, 3) um
     n_probe = res.r_mm.size
-    center, edge = np.linalg.norm(amp[n_probe]), np.linalg.norm(amp[n_probe + 1])
-    return Answer(np.asarray(center), np.asarray(edge), np.zeros(0)), t, int(res.meta["dofs"])
+    window = TRANSIENT["window_ms"] * 1e-3
+
+    def peaks(t0: float, t1: float) -> np.ndarray:
+        sel = (h.t >= t0 - 1e-12) & (h.t < t1 - 1e-12)
+        amp = np.abs(h.u[sel][:, n_probe:n_probe + 2]).max(axis=0) * 1e6  # (2, 3) um
+        return np.linalg.norm(amp, axis=1)
+
+    last, before = peaks(start, np.inf), peaks(start - window, start)
+    unsettled = float(np.max(np.abs(last / before - 1.0)))
+    return (Answer(np.asarray(last[0]), np.asarray(last[1]), np.zeros(0)), t,
+            int(res.meta["dofs"]), unsettled)
 
 
 def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
@@ -134,10 +144,10 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
     sideways) are counted in ``refused``; no row at all when every design is refused."""
     from fem import SceneError
 
-    same, total, times, h_times, dofs, refused = [], [], [], [], [], 0
+    same, total, times, h_times, dofs, unsettled, refused = [], [], [], [], [], [], 0
     for des, ref in zip(designs, refs, strict=True):
         try:
-            a, t, n = transient_answer(des.scene)
+            a, t, n, u = transient_answer(des.scene)
         except (SceneError, ValueError):  # e.g. a bare unit on pins drifts away in time
             refused += 1
             continue
@@ -147,6 +157,7 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
         times.append(t)
         h_times.append(th)
         dofs.append(n)
+        unsettled.append(u)
     if not total:
         return []
     med = {k: float(np.median([e[k] for e in total])) for k in ("center", "edge", "worst")}
@@ -160,7 +171,8 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
              **{f"{k}_max": v for k, v in mx.items()},
              "profile_median": float("nan"), "profile_max": float("nan"),
              "vs_harmonic_center_max": vs["center"], "vs_harmonic_edge_max": vs["edge"],
-             "designs": len(total), "refused": refused}]
+             "designs": len(total), "refused": refused,
+             "unsettled_max": float(np.max(unsettled))}]
 
 
 def _scalar_errors(a: Answer, ref: Answer) -> dict[str, float]:

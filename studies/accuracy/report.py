@@ -132,6 +132,7 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
         else:
             txt = f"{o['n']} FE samples (measured; {o['total_s'] / 3600:.3g} core-hours in all)"
         L.append(f"- {kind.upper()}: 1 % median held-out error needs {txt}.")
+    L += _more_findings(res)
     L += ["", "## Error metric", "", METRIC_DOC.strip().split("\n\n", 1)[1].strip(), "",
           "The reference is the FE solver with quadratic elements at "
           f"{s.ref_level:.3g} x the default element sizes (median {_median_int(res['ref_dofs'])} "
@@ -167,7 +168,10 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
           f"it differs by at most {_pct(tr['vs_harmonic_center_max'])} (center) and "
           f"{_pct(tr['vs_harmonic_edge_max'])} (edge) and takes "
           f"{tr['seconds'] / tr['harmonic_seconds']:.0f}x the harmonic solve's time; its profile "
-          "is not compared (a transient's profile is a peak over the whole run).", ""]
+          "is not compared (a transient's profile is a peak over the whole run). The peaks "
+          "still change by up to "
+          f"{_pct(tr['unsettled_max'])} from the window before the last to the last (the "
+          "part of the difference that is start-up not yet decayed, not discretisation).", ""]
     L += ["Export parity (largest |d ln amplitude| between the ONNX graph and the in-memory "
           f"model on the held-out rows): GP {res['parity']['gp']:.2g}, NN "
           f"{res['parity']['nn']:.2g}.", ""]
@@ -205,6 +209,47 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
                      "n/a | n/a | n/a | n/a |")
     L += ["", "## Machine", ""] + [f"- {k}: {v}" for k, v in machine().items()] + [""]
     return "\n".join(L)
+
+
+def _more_findings(res: dict[str, Any]) -> list[str]:
+    """Findings on the learned models, the transient and the effects, from the tables."""
+    out = []
+    fe_default = next(r for r in res["fe"] if not r["level"])
+    for kind, label in (("nn", "NN"), ("gp", "GP")):
+        rows = [r for r in res["learned"] if r["kind"] == kind]
+        if not rows:
+            continue
+        fast = min(rows, key=lambda r: r["seconds"])
+        one = min((r for r in rows if r["method"].endswith("batch 1")),
+                  key=lambda r: r["seconds"])
+        out.append(f"- {label} ({rows[0]['n_train']} FE samples): error {_pct(one['worst_median'])}"
+                   f" median / {_pct(one['worst_max'])} worst design against the reference; "
+                   f"{_t(one['seconds'])} per answer at batch 1 ({one['method']}), "
+                   f"{_t(fast['seconds'])} per row batched: "
+                   f"{fe_default['seconds'] / one['seconds']:.0f}x and "
+                   f"{fe_default['seconds'] / fast['seconds']:.0f}x faster than the FE solver "
+                   f"at its default mesh ({_t(fe_default['seconds'])}, error "
+                   f"{_pct(fe_default['worst_median'])} median).")
+    for tr in res["transient"]:
+        ratio = tr["seconds"] / tr["harmonic_seconds"]
+        diff = max(tr["vs_harmonic_center_max"], tr["vs_harmonic_edge_max"])
+        out.append(f"- The transient steady state costs {ratio:.0f}x a harmonic solve on the "
+                   f"same mesh and differs from it by up to {_pct(diff)} (start-up still "
+                   f"decaying: up to {_pct(tr['unsettled_max'])} change between the last two "
+                   "windows); the harmonic analysis answers the steady question directly.")
+    eff = [r for r in res["effects"] if "time_ratio" in r and r["variant"] != "all effects"]
+    safe = [r["variant"] for r in eff if r["worst_max"] <= TARGET]
+    best = min(eff, key=lambda r: r["worst_max"]) if eff else None
+    if safe:
+        out.append(f"- Variants within {_pct(TARGET)} of the full answer on every design: "
+                   f"{', '.join(safe)}.")
+    elif best is not None:
+        out.append("- No variant (effect switched off, or model choice) stays within "
+                   f"{_pct(TARGET)} on every design; "
+                   f"the least influential is '{best['variant']}' (change up to "
+                   f"{_pct(best['worst_max'])}, median {_pct(best['worst_median'])}, time "
+                   f"x{best['time_ratio']:.2f}).")
+    return out
 
 
 def _median_int(values: list[int]) -> int:
