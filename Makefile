@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PIP := $(BIN)/pip install --quiet -c constraints.txt
 
-.PHONY: demo test test-slow lint bench clean venv
+.PHONY: demo test test-slow lint bench bench-accuracy clean venv
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
@@ -46,6 +46,10 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_generate.py
 	$(BIN)/python bench/bench_surrogate.py
 	$(BIN)/python bench/bench_plan.py
+
+# What accuracy costs in time: writes docs/accuracy-vs-time.md and .png (about 10 minutes).
+bench-accuracy: $(STAMP)
+	$(BIN)/hapticrom bench accuracy --out docs/accuracy-vs-time.md
 
 clean:
 	rm -rf $(VENV) out

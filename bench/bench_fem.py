@@ -3,7 +3,9 @@
 For each (order, level) the scene is solved harmonically `--repeat` times; the table prints DOFs,
 the median wall time (mesh, assembly, factorisation and solve included) and the relative error
 of the surface amplitude at the probe radii (0-20 mm) against the finest quadratic level.
-Level 1 is the paper's resolution (0.5 mm near field, 2 mm far field); level f scales both.
+Level 1 is the paper's resolution (0.5 mm near field, 2 mm far field); level f scales both
+(wavelength-following off, as in ``hapticrom bench accuracy``, which runs the same ladder on
+the study's unit designs).
 
     .venv/bin/python bench/bench_fem.py            # full table (about a minute)
     .venv/bin/python bench/bench_fem.py --quick    # two levels only
@@ -12,33 +14,25 @@ Level 1 is the paper's resolution (0.5 mm near field, 2 mm far field); level f s
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from pathlib import Path
 
 import numpy as np
 
 from fem import simulate
 from fem.scene import load_scene, scene_from_dict, scene_to_dict
+from studies.accuracy import fe_ladder
+from studies.accuracy.timing import timed
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "forearm.toml"
 
 
 def scene_at(level: float, order: int, direction: str):
-    d = scene_to_dict(load_scene(EXAMPLE))
-    d["mesh"].update(near_size_mm=0.5 * level, far_size_mm=2.0 * level, order=order)
+    """The forearm example at a mesh level (study's :func:`fe_ladder.scene_at`) and load
+    direction, probed every 1 mm over 0-20 mm."""
+    d = fe_ladder.scene_at(scene_to_dict(load_scene(EXAMPLE)), level, order)
     d["load"]["direction"] = direction
     d["output"]["radii_mm"] = list(np.arange(0.0, 20.5, 1.0))
     return scene_from_dict(d)
-
-
-def timed(scene, repeat: int):
-    times, res = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        res = simulate(scene)
-        times.append(time.perf_counter() - t0)
-    return res, statistics.median(times)
 
 
 def amplitude(res) -> np.ndarray:
@@ -53,7 +47,8 @@ def main() -> None:
     args = ap.parse_args()
     levels = [2.0, 1.0] if args.quick else [2.0, 1.0, 0.7, 0.5]
     ref_level = 0.5 if args.quick else 0.25
-    ref, _ = timed(scene_at(ref_level, 2, args.direction), 1)
+    ref_scene = scene_at(ref_level, 2, args.direction)
+    ref, _ = timed(lambda: simulate(ref_scene), 1)
     a_ref = amplitude(ref)
     print(f"forearm, {args.direction} load, 120 Hz; reference: order 2 at level {ref_level} "
           f"({ref.meta['dofs']} dofs)")
@@ -61,7 +56,8 @@ def main() -> None:
           f"{'median s':>9} {'max rel err':>12} {'normalized edge':>16}")
     for order in (1, 2):
         for level in levels:
-            res, t = timed(scene_at(level, order, args.direction), args.repeat)
+            scene = scene_at(level, order, args.direction)
+            res, t = timed(lambda scene=scene: simulate(scene), args.repeat)
             err = np.max(np.abs(amplitude(res) / a_ref - 1))
             print(f"{order:>5} {level:>6.2f} {0.5 * level:>8.3f} {2 * level:>7.2f} "
                   f"{res.meta['dofs']:>8} {t:>9.3f} {err:>12.2e} {res.normalized_edge:>16.4f}")

@@ -25,43 +25,13 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import numpy as np
 
-
-def median_us(fn, n: int, repeat: int = 5) -> float:
-    """Median over ``repeat`` blocks of the mean time of ``n`` calls [us]."""
-    fn()
-    blocks = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        blocks.append((time.perf_counter() - t0) / n * 1e6)
-    return float(np.median(blocks))
+from studies.accuracy.timing import matmul_rate, median_us, one_add_graph
 
 
 def nn_flops_per_row(est) -> float:
     """Multiply-adds x 2 of the ensemble's layers plus the output map, per input row."""
     flops = sum(2.0 * w.shape[0] * w.shape[1] * w.shape[2] for w in est.weights_)
     return flops
-
-
-def one_add_graph(n_features: int) -> bytes:
-    """ONNX bytes of y = x + x on a float32 (batch, n_features) input."""
-    from onnx import TensorProto, helper
-
-    io = [helper.make_tensor_value_info(n, TensorProto.FLOAT, [None, n_features])
-          for n in ("x", "y")]
-    graph = helper.make_graph([helper.make_node("Add", ["x", "x"], ["y"])], "floor", [io[0]],
-                              [io[1]])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)])
-    model.ir_version = 10
-    return model.SerializeToString()
-
-
-def matmul_rate(dtype=np.float32, n: int = 512) -> float:
-    """Dense matmul rate of this machine, one thread [FLOP/s] (median of 5)."""
-    a = np.random.default_rng(0).random((n, n)).astype(dtype)
-    t = median_us(lambda: a @ a, 5) * 1e-6
-    return 2.0 * n**3 / t
 
 
 def main() -> None:

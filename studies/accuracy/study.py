@@ -1,0 +1,67 @@
+"""Run the accuracy study: every way to answer on the same designs, one result dict."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from . import effects, fe_ladder, learned, learning_curves
+from .designs import N_DESIGNS, N_QUICK, load_study_data, pick_designs
+
+__all__ = ["Settings", "run_study"]
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What one run measures (``quick``: CI-sized)."""
+
+    n_designs: int
+    levels: tuple[float, ...]
+    ref_level: float
+    repeat: int
+    gp_sizes: tuple[int, ...]
+    nn_sizes: tuple[int, ...]
+    nn_options: dict[str, Any] = field(default_factory=dict)
+    batch: int = learned.BATCH
+    quick: bool = False
+
+    @classmethod
+    def make(cls, quick: bool) -> Settings:
+        if quick:
+            return cls(N_QUICK, fe_ladder.LEVELS_QUICK, fe_ladder.REF_LEVEL_QUICK, 1,
+                       learning_curves.GP_SIZES_QUICK, learning_curves.NN_SIZES_QUICK,
+                       dict(learning_curves.NN_QUICK_OPTIONS), learned.BATCH_QUICK, True)
+        return cls(N_DESIGNS, fe_ladder.LEVELS, fe_ladder.REF_LEVEL, 3,
+                   learning_curves.GP_SIZES, learning_curves.NN_SIZES)
+
+
+def run_study(quick: bool = False, log: Any = print) -> dict[str, Any]:
+    """Measure everything; return plain data for :func:`studies.accuracy.report.write_report`.
+    ``log`` receives one line per finished stage."""
+    s = Settings.make(quick)
+    t0 = time.perf_counter()
+    sd = load_study_data()
+    designs = pick_designs(sd, s.n_designs)
+    grid = sd.data.grid_mm
+    refs, ref_dofs = fe_ladder.reference_answers(designs, grid, s.ref_level)
+    log(f"reference solved ({time.perf_counter() - t0:.0f} s)")
+    fe = fe_ladder.fe_ladder(designs, refs, grid, s.levels, s.repeat)
+    log(f"FE ladder done ({time.perf_counter() - t0:.0f} s)")
+    n_tr = 1 if quick else len(designs)  # about 8 s per design
+    tr = fe_ladder.transient_rows(designs[:n_tr], refs[:n_tr], grid)
+    log(f"transient done ({time.perf_counter() - t0:.0f} s)")
+    eff = effects.audit(designs, grid, s.repeat)
+    log(f"effects audit done ({time.perf_counter() - t0:.0f} s)")
+    gp_curve, gp = learning_curves.curve("gp", sd, s.gp_sizes)
+    log(f"GP learning curve done ({time.perf_counter() - t0:.0f} s)")
+    nn_curve, nn = learning_curves.curve("nn", sd, s.nn_sizes, s.nn_options)
+    log(f"NN learning curve done ({time.perf_counter() - t0:.0f} s)")
+    lr, parity = learned.learned_rows(gp, nn, sd, designs, refs, s.batch)
+    log(f"learned models timed ({time.perf_counter() - t0:.0f} s)")
+    return {"settings": s, "designs": designs, "ref_dofs": ref_dofs, "fe": fe, "transient": tr,
+            "effects": eff, "gp_curve": gp_curve, "nn_curve": nn_curve,
+            "one_percent": {"gp": learning_curves.samples_for(gp_curve),
+                            "nn": learning_curves.samples_for(nn_curve)},
+            "learned": lr, "parity": parity, "n_train": int(sd.train.size),
+            "n_test": int(sd.test.size), "wall_s": time.perf_counter() - t0}

@@ -1,0 +1,122 @@
+"""`hapticrom bench accuracy` (studies.accuracy): the quick run writes a complete report and
+plot whose numbers are finite and consistent (finer mesh -> smaller error, ONNX = in-memory
+model, the default mesh equals the level-1 quadratic ladder row), bad arguments exit 2 without
+writing, and the metric and curve helpers are exact on analytic inputs."""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from hapticrom.cli import main
+from studies.accuracy import run_study
+from studies.accuracy.designs import load_study_data, pick_designs
+from studies.accuracy.learning_curves import samples_for
+from studies.accuracy.metric import Answer, errors, summary
+from studies.accuracy.report import fastest_within, pareto, render
+
+SECTIONS = ("## Findings", "## Error metric", "## Designs", "## Every way to get an answer",
+            "## Cost of the model: learning curves", "## Effects audit", "## Machine")
+
+
+@pytest.fixture(scope="module")
+def result():
+    return run_study(quick=True, log=lambda m: None)
+
+
+def test_metric_is_exact_on_analytic_answers():
+    ref = Answer(np.array(2.0), np.array(4.0), np.array([3.0, 4.0]))
+    a = Answer(np.array(2.2), np.array(3.0), np.array([3.0, 4.0]) * 1.05)
+    e = errors(a, ref)
+    assert e["center"] == pytest.approx(0.1)
+    assert e["edge"] == pytest.approx(0.25)
+    assert e["profile"] == pytest.approx(0.05)
+    assert e["worst"] == pytest.approx(0.25)
+    s = summary([e, errors(ref, ref)])
+    assert s["worst_max"] == pytest.approx(0.25) and s["worst_median"] == pytest.approx(0.125)
+
+
+def test_samples_for_reads_measured_and_extrapolates_a_power_law():
+    rows = [{"n": n, "worst_median": 0.1 * (n / 100) ** -0.5, "generation_s": n * 1.0,
+             "total_s": n * 1.0} for n in (100, 400)]
+    got = samples_for(rows)
+    assert got["extrapolated"] and got["slope"] == pytest.approx(-0.5)
+    assert got["n"] == pytest.approx(10000, rel=1e-9)
+    assert got["total_s"] == pytest.approx(10000, rel=1e-9)
+    rows.append({"n": 20000, "worst_median": 0.005, "generation_s": 1.0, "total_s": 7.0})
+    assert samples_for(rows) == {"n": 20000, "total_s": 7.0, "extrapolated": False,
+                                 "slope": None}
+
+
+def test_pareto_and_fastest():
+    pts = [{"seconds": 1.0, "e": 0.5}, {"seconds": 2.0, "e": 0.1}, {"seconds": 3.0, "e": 0.2},
+           {"seconds": 0.5, "e": 0.9}]
+    assert [p["seconds"] for p in pareto(pts, "e")] == [0.5, 1.0, 2.0]
+    assert fastest_within(pts, "e", 0.2)["seconds"] == 2.0
+    assert fastest_within(pts, "e", 0.01) is None
+
+
+def test_designs_are_held_out_distinct_and_deterministic():
+    sd = load_study_data()
+    a, b = pick_designs(sd, 5), pick_designs(sd, 5)
+    assert [d.row for d in a] == [d.row for d in b]
+    assert len({d.row for d in a}) == 5
+    assert set(d.row for d in a) <= set(sd.test.tolist())
+    with pytest.raises(ValueError, match="n = 0"):
+        pick_designs(sd, 0)
+
+
+def test_quick_study_numbers_are_finite_and_consistent(result):
+    fe = {(r["order"], r["level"]): r for r in result["fe"]}
+    for r in result["fe"]:
+        assert r["seconds"] > 0 and all(math.isfinite(r[f"{k}_median"])
+                                        for k in ("center", "edge", "profile", "worst"))
+    for order in (1, 2):  # finer mesh -> smaller error; quadratic beats linear on one mesh
+        assert fe[(order, 1.0)]["worst_median"] < fe[(order, 2.0)]["worst_median"]
+        assert fe[(order, 1.0)]["dofs"] > fe[(order, 2.0)]["dofs"]
+    assert fe[(2, 2.0)]["worst_median"] < fe[(1, 2.0)]["worst_median"]
+    # the default mesh of these designs is not refined by the wavelength rule: same answer
+    assert fe[(2, None)]["worst_median"] == pytest.approx(fe[(2, 1.0)]["worst_median"],
+                                                           rel=1e-6)
+    # ONNX equals the in-memory model (same design errors to float32 precision)
+    by = {r["method"]: r for r in result["learned"]}
+    assert result["parity"]["gp"] < 1e-6 and result["parity"]["nn"] < 1e-4
+    for a, b in (("GP scikit-learn, batch 1", "GP ONNX, batch 1"),
+                 ("NN torch, batch 1", "NN ONNX, batch 1"),
+                 ("NN ONNX, batch 1", "NN Predictor.predict (checks + ONNX), batch 1")):
+        assert by[a]["worst_median"] == pytest.approx(by[b]["worst_median"], rel=1e-3, abs=1e-6)
+    assert all(r["seconds"] > 0 and math.isfinite(r["worst_max"]) for r in result["learned"])
+    for r in (*result["gp_curve"], *result["nn_curve"]):
+        assert r["total_s"] == pytest.approx(r["generation_s"] + r["train_s"])
+        assert 0 < r["worst_median"] <= r["worst_p95"]
+    eff = {r["variant"]: r for r in result["effects"]}
+    assert eff["all effects"]["worst_max"] == 0.0
+    assert sum(eff["no encapsulation"][k] for k in ("applies", "not_present", "refused")) == 3
+
+
+def test_report_structure(result):
+    text = render(result, "x.png", "hapticrom bench accuracy --quick")
+    positions = [text.index(s) for s in SECTIONS]
+    assert positions == sorted(positions)
+    assert "![error against time per answer](x.png)" in text
+    assert "nan" not in text.replace("n/a", "")
+    table = [ln for ln in text.splitlines() if ln.startswith("| FE order")]
+    assert len(table) == 4
+
+
+def test_cli_writes_report_and_plot(tmp_path, result, monkeypatch):
+    import studies.accuracy as acc
+
+    monkeypatch.setattr(acc, "run_study", lambda quick, log: result)
+    out = tmp_path / "acc.md"
+    assert main(["bench", "accuracy", "--quick", "--out", str(out)]) == 0
+    assert out.read_text().startswith("# What accuracy costs in time")
+    assert (tmp_path / "acc.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("out", ["report.txt", "missing-dir/acc.md"])
+def test_cli_bad_out_exits_2_and_writes_nothing(tmp_path, out, capsys):
+    assert main(["bench", "accuracy", "--quick", "--out", str(tmp_path / out)]) == 2
+    assert re.search(r"--out", capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []
