@@ -31,8 +31,9 @@ from planner.crosstalk import UnitField, crosstalk_matrix
 __all__ = ["SimDevice", "envelopes", "field_maps", "unit_field"]
 
 DT_MS = 1.0  # envelope time step [ms]
-MAX_FRAMES = 150  # animation frames at most (the frame interval grows for long patterns)
-GRID_POINTS = 96  # field map resolution per side
+MAX_FRAMES = 80  # animation frames at most (the frame interval grows for long patterns)
+GRID_POINTS = 72  # field map resolution per side
+GIF_DPI = 60  # animation resolution (a 252 x 228 pixel GIF)
 
 
 def unit_field(plan: PlanFile) -> UnitField:
@@ -175,19 +176,22 @@ def _write_figures(out: Path, freq: float, t: NDArray, e: NDArray, sites: NDArra
     fig.savefig(png, dpi=110)
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(5, 4.6))
+    # the animation: no axes or colour bar (drawing ticks dominates the cost of a frame); the
+    # scale is in the title, the axes are the PNG's
+    fig, ax = plt.subplots(figsize=(4.2, 4.2))
     im = draw_map(ax, 0)
-    fig.colorbar(im, ax=ax, label="skin amplitude [um]")
-    title = ax.set_title("")
+    ax.set_axis_off()
+    fig.subplots_adjust(0.02, 0.02, 0.98, 0.9)
+    title = ax.set_title("", fontsize=9)
 
     def update(i: int):
         im.set_data(field(i))
-        title.set_text(f"t = {t[i]:.0f} ms")
+        title.set_text(f"t = {t[i]:4.0f} ms   (black 0, white {vmax:.1f} um)")
         return im, title
 
     fps = max(1, round(1e3 / (t[frames.step] - t[0]))) if len(t) > 1 else 1
     gif = out / "field.gif"
     FuncAnimation(fig, update, frames=list(frames), blit=False).save(
-        gif, writer=PillowWriter(fps=min(fps, 50)))
+        gif, writer=PillowWriter(fps=min(fps, 50)), dpi=GIF_DPI)
     plt.close(fig)
     return [png, gif]
