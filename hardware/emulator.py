@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 from hardware.protocol import (
     APPEND,
+    FRAME_TIMEOUT_S,
     ST_ON_TIME,
     ST_PLAYING,
     ST_WATCHDOG,
@@ -197,6 +198,7 @@ class PtyEmulator:
                                    start_time=time.monotonic())
         self.lock = threading.Lock()
         self.decoder = Decoder()
+        self.last_byte = time.monotonic()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="pty-emulator", daemon=True)
 
@@ -206,7 +208,14 @@ class PtyEmulator:
             data = os.read(self.master, 4096) if ready else b""
             with self.lock:
                 now = time.monotonic()
-                for item in self.decoder.feed(data):
+                if data:
+                    self.last_byte = now
+                    items = self.decoder.feed(data)
+                elif self.decoder.buffer and now - self.last_byte > FRAME_TIMEOUT_S:
+                    items = self.decoder.timeout()
+                else:
+                    items = []
+                for item in items:
                     os.write(self.master, self.array.handle(item, now))
                 self.array.tick(time.monotonic())
 

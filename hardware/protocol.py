@@ -32,9 +32,10 @@ import struct
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-__all__ = ["LEVEL_SCALE", "MAX_PAYLOAD", "START", "VERSION", "Decoder", "ErrorCode", "Frame",
-           "FrameError", "Msg", "Segment", "Status", "crc16", "decode_ack", "decode_levels",
-           "decode_nak", "decode_schedule", "decode_status", "encode", "encode_ack",
+__all__ = ["FRAME_TIMEOUT_S", "LEVEL_SCALE", "MAX_PAYLOAD", "START", "VERSION", "Decoder",
+           "ErrorCode", "Frame", "FrameError", "Msg", "Segment", "Status", "crc16", "decode_ack",
+           "decode_levels", "decode_nak", "decode_schedule", "decode_status", "encode",
+           "encode_ack",
            "encode_levels", "encode_nak", "encode_schedule", "encode_status", "from_level",
            "to_level"]
 
@@ -42,6 +43,8 @@ START = 0xA5
 VERSION = 1
 HEADER = struct.Struct("<BBBBH")  # start, version, type, seq, length
 MAX_PAYLOAD = 4096
+FRAME_TIMEOUT_S = 0.02  # a frame's bytes arrive within this (4 kB at 115200 baud: 0.36 s;
+# the timeout runs from the last byte received, so it bounds the gap between bytes)
 LEVEL_SCALE = 4096  # int16 level units per nominal level: range about -8 .. +8
 SEGMENT = struct.Struct("<IHBh")  # t_ms, duration_ms, channel, level
 MAX_SEGMENTS = (MAX_PAYLOAD - 3) // SEGMENT.size
@@ -157,6 +160,21 @@ class Decoder:
                 continue
             out.append(Frame(msg, seq, bytes(self.buffer[HEADER.size:HEADER.size + length])))
             del self.buffer[:end]
+
+    def timeout(self) -> list[Frame | FrameError]:
+        """The line went quiet with an incomplete frame buffered (a corrupted length field
+        makes the decoder wait for bytes that never come): drop its start byte and decode
+        what follows, until nothing is left waiting. Receivers call this after
+        ``FRAME_TIMEOUT_S`` without new bytes."""
+        if not self.buffer:
+            return []
+        seq = self.buffer[3] if len(self.buffer) > 3 else None
+        out: list[Frame | FrameError] = [
+            FrameError(ErrorCode.BAD_LENGTH, seq, "incomplete frame timed out")]
+        while self.buffer:
+            del self.buffer[:1]
+            out += self.feed(b"")
+        return out
 
 
 # ---- payloads -------------------------------------------------------------------------------

@@ -89,6 +89,7 @@ class SerialDevice(Device):
                     self.disconnected = True
                     raise DeviceError(f"serial link lost: {err}") from None
                 if reply is None:
+                    self.decoder.buffer.clear()  # a stale partial reply
                     continue  # no answer in time: send again
                 if reply.type == Msg.NAK:
                     _, code = decode_nak(reply.payload)
