@@ -67,7 +67,7 @@ def test_exposure_meter_by_hand_and_the_action_value(tmp_path):
     first.record(np.array([[u, 0.0]]), 125.0, [1.0 * 3600])
     second = ExposureMeter(2, state_path=state)
     assert second.a8()[0] == pytest.approx(5.0 * math.sqrt(1 / 8))
-    with pytest.raises(SafetyError, match=r"A\(8\) = 2.6"):
+    with pytest.raises(SafetyError, match=r"A\(8\) = 2\.56"):
         second.check(np.array([[u, 0.0]]), 125.0, [1.1 * 3600])
     assert date.today().isoformat() in state.read_text()
 
