@@ -39,6 +39,10 @@ class Heartbeat:
                 return
 
     def start(self) -> Heartbeat:
+        """Beat once now (so that commands right after this are covered), then every
+        period in the thread."""
+        self.device.heartbeat()
+        self.beats += 1
         self._thread.start()
         return self
 
