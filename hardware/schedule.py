@@ -82,8 +82,14 @@ def plan_from_dict(d: Any) -> PlanFile:
                             "brake, inter-stimulus interval from the transient model): re-plan "
                             "it with the current `hapticrom plan` so that it carries the timing")
     t = d["timing"]
+    if t is None or (isinstance(t, dict) and t.get("unavailable")):
+        why = f" ({t['unavailable']})" if t else ""
+        raise PlanFileError("timing", f"the plan's timing is unavailable{why}: play needs the "
+                            "unit's rise, decay, overdrive, brake and inter-stimulus interval; "
+                            "re-plan with a drive frequency and model the timing can be "
+                            "computed for")
     if not isinstance(t, dict):
-        raise PlanFileError("timing", "plan.timing must be an object")
+        raise PlanFileError("timing", "plan.timing must be an object; re-plan")
     timing = {}
     for key in TIMING_KEYS:
         v = t.get(key)

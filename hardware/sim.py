@@ -6,8 +6,11 @@ planner used; checked against the plan's crosstalk diagonal), one copy centred o
 Each channel's vibration envelope e(t) (1 = the nominal steady amplitude) follows its segment
 levels as a first-order system with the plan's timing: time constant rise_ms / ln 9 while
 rising and decay_ms / ln 9 while falling (a 10-90 % time of a first-order response is
-tau ln 9); an overdrive kick drives towards its higher level, a brake pulse towards a negative
-one, and the envelope never goes below 0 (the rotor stops). The skin field is the incoherent
+tau ln 9); an overdrive kick drives towards its higher level but ends at the nominal amplitude
+(the kick of ERM practice stops when the motor reaches its nominal speed, which is how the
+plan's overdrive_ms is defined), a brake pulse drives towards a negative level, and the
+envelope never goes below 0 (the rotor stops). This is a first-order stand-in for the
+transient model that produced the timing, not that model itself. The skin field is the incoherent
 sum over units, A(x, t) = sqrt(sum_j e_j(t)^2 a_j(x)^2) (independent ERMs, as in the plan).
 
 ``play`` writes ``field-peak.png`` (the field at its peak, and every site's amplitude against
@@ -60,11 +63,25 @@ def unit_field(plan: PlanFile) -> UnitField:
 
 def envelopes(segments: list[Segment], n_channels: int, timing: dict[str, float],
               total_ms: float) -> tuple[NDArray, NDArray]:
-    """(t_ms, e): each channel's envelope (n_channels, len(t)) on a DT_MS grid."""
+    """(t_ms, e): each channel's envelope (n_channels, len(t)) on a DT_MS grid.
+
+    First order towards the segment level (rise and decay time constants from the timing).
+    When the plan has an overdrive kick, the first segment of each run of positive segments
+    on a channel is that kick: the envelope rises towards the kick level but stops at the
+    kick level / overdrive_level (the nominal amplitude), as the kick of ERM practice ends
+    when the motor reaches its nominal speed. Reverse drive pulls it to 0, not below."""
     t = np.arange(0.0, total_ms + 5 * timing["decay_ms"] + DT_MS, DT_MS)
     target = np.zeros((n_channels, len(t)))
-    for s in segments:
-        target[s.channel, (t >= s.t_ms) & (t < s.t_ms + s.duration_ms)] = s.level
+    cap = np.full((n_channels, len(t)), np.inf)
+    kick = timing["overdrive_ms"] > 0 and timing["overdrive_level"] > 1
+    last: dict[int, tuple[int, float]] = {}  # channel -> (end [ms], level) of its last segment
+    for s in sorted(segments, key=lambda s: (s.channel, s.t_ms)):
+        span = (t >= s.t_ms) & (t < s.t_ms + s.duration_ms)
+        target[s.channel, span] = s.level
+        end, level = last.get(s.channel, (-1, 0.0))
+        if kick and s.level > 0 and not (end == s.t_ms and level > 0):
+            cap[s.channel, span] = s.level / timing["overdrive_level"]
+        last[s.channel] = (s.t_ms + s.duration_ms, s.level)
     tau_up = max(timing["rise_ms"], DT_MS) / math.log(9)
     tau_down = max(timing["decay_ms"], DT_MS) / math.log(9)
     k_up, k_down = 1 - math.exp(-DT_MS / tau_up), 1 - math.exp(-DT_MS / tau_down)
@@ -73,7 +90,8 @@ def envelopes(segments: list[Segment], n_channels: int, timing: dict[str, float]
         goal = target[:, i - 1]
         prev = e[:, i - 1]
         k = np.where(goal > prev, k_up, k_down)
-        e[:, i] = np.maximum(prev + k * (goal - prev), 0.0)
+        nxt = prev + k * (goal - prev)
+        e[:, i] = np.clip(nxt, 0.0, np.maximum(cap[:, i - 1], np.minimum(prev, nxt)))
     return t, e
 
 

@@ -79,6 +79,9 @@ def test_a_channel_driven_twice_needs_the_inter_stimulus_interval():
 
 @pytest.mark.parametrize("change, field", [
     (lambda d: d.pop("timing"), "timing"),
+    (lambda d: d.update(timing=None), "timing"),
+    (lambda d: d.update(timing={**dict.fromkeys(TIMING), "unavailable": "180 Hz needs 4.75 V"}),
+     "timing"),
     (lambda d: d["timing"].pop("brake_ms"), "timing.brake_ms"),
     (lambda d: d["timing"].update(overdrive_level=0.5), "timing.overdrive_level"),
     (lambda d: d["timing"].update(rise_ms="fast"), "timing.rise_ms"),
@@ -95,6 +98,8 @@ def test_bad_plans_name_the_key(change, field):
     assert err.value.field == field
     if field == "timing":
         assert "re-plan" in str(err.value)
+    if d.get("timing") and d["timing"].get("unavailable"):
+        assert "unavailable (180 Hz needs 4.75 V)" in str(err.value)
 
 
 def test_schedule_levels_timing_and_segments_by_hand():
