@@ -93,6 +93,11 @@ class Device(ABC):
     def status(self) -> Status:
         return self._status()
 
+    @property
+    def watchdog_s(self) -> float:
+        """The heartbeat deadline the host must keep [s]."""
+        return self.limits.watchdog_s
+
     def close(self) -> None:
         if not self.closed:
             self.closed = True

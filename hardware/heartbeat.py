@@ -19,10 +19,10 @@ class Heartbeat:
 
     def __init__(self, device: Any, period_s: float | None = None) -> None:
         self.device = device
-        self.period_s = period_s if period_s is not None else device.limits.watchdog_s / 4
-        if not 0 < self.period_s < device.limits.watchdog_s:
+        self.period_s = period_s if period_s is not None else device.watchdog_s / 4
+        if not 0 < self.period_s < device.watchdog_s:
             raise ValueError(f"heartbeat period {self.period_s!r} s: allowed 0 < period < "
-                             f"the watchdog time {device.limits.watchdog_s} s")
+                             f"the watchdog time {device.watchdog_s} s")
         self.error: BaseException | None = None
         self.beats = 0
         self._stop = threading.Event()

@@ -69,9 +69,16 @@ class SerialDevice(Device):
         self.seq = 0
         self.disconnected = False
         self.retransmissions = 0
-        found = len(self._status().levels)
-        if found < n_channels:
-            raise DeviceError(f"the device has {found} channels: the plan needs {n_channels}")
+        status = self._status()
+        if len(status.levels) < n_channels:
+            raise DeviceError(f"the device has {len(status.levels)} channels: the plan needs "
+                              f"{n_channels}")
+        self.device_watchdog_s = status.watchdog_ms / 1e3
+
+    @property
+    def watchdog_s(self) -> float:
+        """The shorter of the host's and the device's watchdog times [s]."""
+        return min(self.limits.watchdog_s, self.device_watchdog_s or self.limits.watchdog_s)
 
     def _transact(self, msg: Msg, payload: bytes = b"") -> Frame:
         """Send one command and return its reply, retrying as the module docstring says."""

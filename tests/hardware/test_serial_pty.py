@@ -58,6 +58,7 @@ def test_set_levels_heartbeat_and_status(emu):
         dev.heartbeat()
         s = dev.status()
         assert s.levels == (0.5, 1.0, 0.0, 1.0) and s.watchdog_ms == 250
+        assert dev.watchdog_s == 0.25
     assert emu.array.levels == [0.0] * N  # stopped on the way out
 
 
@@ -81,6 +82,13 @@ def test_a_heartbeat_thread_keeps_the_array_on_and_its_end_trips_the_watchdog(em
         assert emu.array.levels == [0.5] * N and hb.error is None and hb.beats >= 3
     assert wait_until(lambda: len(channel_stops(emu, "watchdog")) == N)
     dev.close()
+
+
+def test_the_heartbeat_follows_the_shorter_watchdog_of_device_and_host():
+    with PtyEmulator(N, watchdog_s=0.1) as emu:
+        dev = SerialDevice(emu.port, N)
+        assert dev.watchdog_s == 0.1 and Heartbeat(dev).period_s == 0.025
+        dev.close()
 
 
 def test_on_time_limit_over_the_link():
