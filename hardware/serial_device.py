@@ -58,8 +58,8 @@ class SerialDevice(Device):
         if isinstance(port, str):
             try:
                 port = serial.Serial(port, baudrate=baudrate, timeout=0)
-            except (serial.SerialException, OSError) as err:
-                raise DeviceError(f"cannot open serial port {port!r}: {err}") from None
+            except (serial.SerialException, OSError) as err:  # bad input: exit 2 in the CLI
+                raise ValueError(f"cannot open serial port {port!r}: {err}") from None
         self.port = port
         self.timeout_s = timeout_s
         self.retries = retries

@@ -198,3 +198,40 @@ def test_a_schedule_plays_on_the_emulator_with_overdrive_and_brake(emu):
     levels = [round(e.level, 3) for e in emu.array.events if e.channel == 1]
     u = round(float(sched.steps[0].levels[1]), 3)
     assert levels[:4] == [round(1.5 * u, 3), u, round(-1.5 * u, 3), 0.0]
+
+
+def test_cli_plays_on_a_serial_port_and_records_the_exposure(tmp_path, capsys):
+    import json
+
+    from hapticrom.cli import main
+
+    plan = tmp_path / "plan.json"
+    plan.write_text(json.dumps(line_plan()))
+    pattern = tmp_path / "p.toml"
+    pattern.write_text("[[step]]\nsites = [0, 2]\nduration_ms = 80.0\ngap_ms = 20.0\n"
+                       "[[step]]\nsites = [1]\nduration_ms = 80.0\n")
+    exposure = tmp_path / "exposure.json"
+    with PtyEmulator(3, watchdog_s=WATCHDOG_S) as emu:
+        assert main(["play", str(plan), str(pattern), "--device", f"serial:{emu.port}",
+                     "--exposure-file", str(exposure)]) == 0
+        reasons = {(e.channel, e.reason) for e in emu.array.events}
+    assert {(0, "schedule"), (1, "schedule"), (2, "schedule")} <= reasons
+    assert "watchdog" not in {r for _, r in reasons}
+    assert emu.array.levels == [0.0] * 3
+    dose = json.loads(exposure.read_text())["dose"]
+    assert len(dose) == 3 and min(dose) > 0
+    assert "played on serial:" in capsys.readouterr().out
+
+
+def test_cli_a_missing_serial_port_exits_2(tmp_path, capsys):
+    import json
+
+    from hapticrom.cli import main
+
+    plan = tmp_path / "plan.json"
+    plan.write_text(json.dumps(line_plan()))
+    pattern = tmp_path / "p.toml"
+    pattern.write_text("[[step]]\nsites = [0]\nduration_ms = 10.0\n")
+    port = tmp_path / "ttyNONE"
+    assert main(["play", str(plan), str(pattern), "--device", f"serial:{port}"]) == 2
+    assert f"cannot open serial port '{port}'" in capsys.readouterr().err
