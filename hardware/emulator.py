@@ -105,7 +105,7 @@ class EmulatedArray:
         """Apply one decoded frame; returns the reply frame's bytes."""
         self.received.append((now, item))
         if isinstance(item, FrameError):
-            return encode(Msg.NAK, 0, encode_nak(item.seq or 0, item.code))
+            return self._nak(item.seq or 0, item.code)  # the header's seq (may be damaged)
         if self._last is not None and self._last[:2] == (item.type, item.seq):
             return self._last[2]  # a retransmission: answer again, do not apply again
         reply = self._apply(item, now)

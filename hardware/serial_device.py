@@ -68,7 +68,8 @@ class SerialDevice(Device):
         self.lock = threading.Lock()
         self.seq = 0
         self.disconnected = False
-        self.retransmissions = 0
+        self.retransmissions = 0  # frames sent again
+        self.transient_naks = 0  # of which after a NAK (the rest after a timeout)
         status = self._status()
         if len(status.levels) < n_channels:
             raise DeviceError(f"the device has {len(status.levels)} channels: the plan needs "
@@ -101,6 +102,7 @@ class SerialDevice(Device):
                 if reply.type == Msg.NAK:
                     _, code = decode_nak(reply.payload)
                     if code in TRANSIENT:
+                        self.transient_naks += 1
                         continue
                     raise DeviceError(f"the device refused {msg.name}: {code.name}")
                 return reply

@@ -156,7 +156,7 @@ def test_a_damaged_command_is_sent_again_after_its_nak(emu):
     dev = SerialDevice(Lossy(serial.Serial(emu.port, timeout=0), 0), N)
     dev.port.n = 2
     dev.set_levels(np.array([0.25, 0, 0, 0]))
-    assert dev.retransmissions == 2
+    assert dev.retransmissions == dev.transient_naks == 2  # sent again on each NAK
     assert emu.array.levels[0] == 0.25
     dev.close()
 
