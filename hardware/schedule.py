@@ -8,10 +8,11 @@ Timing comes from the plan's ``timing`` object (the transient model, ``planner.t
 each driven channel gets an overdrive kick of ``overdrive_ms`` at ``overdrive_level`` times its
 level (the kick's ratio to the steady drive is kept at lower levels: an approximation for a
 motor whose speed is not linear in voltage), the steady level for the rest of the step, then
-a brake pulse of reverse drive at the same ratio for ``brake_ms``. A channel driven in two
-successive steps needs a gap of at least ``min_isi_ms`` between them (the shortest
-inter-stimulus interval at which the residual vibration has died out); a shorter gap is an
-error naming the step.
+a brake pulse of reverse drive at the same ratio for ``brake_ms``. Two stimuli of one channel
+(in successive steps or with other steps between) need at least ``min_isi_ms`` (and
+``brake_ms``) from the end of one to the start of the next (the shortest inter-stimulus
+interval at which the residual vibration has died out); a shorter interval is an error naming
+the step.
 """
 
 from __future__ import annotations
@@ -173,18 +174,24 @@ def build_schedule(pattern: Pattern, plan: PlanFile) -> Schedule:
     steps: list[StepDrive] = []
     segs: list[Segment] = []
     start = 0.0
-    prev_active = np.zeros(plan.n_sites, dtype=bool)
+    min_gap = max(t["min_isi_ms"], t["brake_ms"])
+    last_end = np.full(plan.n_sites, -np.inf)  # end of each channel's last stimulus [ms]
+    last_step = np.zeros(plan.n_sites, dtype=int)
     for k, (step, target) in enumerate(zip(pattern.steps, _targets(pattern, plan), strict=True)):
         sol = drive_levels(plan.crosstalk_um, target)
         levels = np.where(sol.levels >= ACTIVE_LEVEL, sol.levels, 0.0)
         active = levels > 0
-        min_gap = max(t["min_isi_ms"], t["brake_ms"])
-        if k and np.any(active & prev_active) and pattern.steps[k - 1].gap_ms < min_gap:
-            ch = int(np.flatnonzero(active & prev_active)[0])
-            raise PatternError(f"step[{k - 1}].gap_ms", f"step[{k - 1}].gap_ms = "
-                               f"{pattern.steps[k - 1].gap_ms:g}: channel {ch} is driven in "
-                               f"steps {k - 1} and {k}, so the gap must be at least the plan's "
-                               f"min_isi_ms (and brake_ms) = {min_gap:g}")
+        soon = active & (start - last_end < min_gap - 1e-9)
+        if np.any(soon):
+            ch = int(np.flatnonzero(soon)[0])
+            j = int(last_step[ch])
+            field = f"step[{j}].gap_ms" if j == k - 1 else f"step[{k}]"
+            raise PatternError(field, f"{field}: channel {ch} is driven in steps {j} and {k} "
+                               f"{start - last_end[ch]:g} ms apart; successive stimuli of a "
+                               f"channel need at least the plan's min_isi_ms (and brake_ms) = "
+                               f"{min_gap:g} ms between them")
+        last_end[active] = start + step.duration_ms
+        last_step[active] = k
         t0, dur = round(start), round(step.duration_ms)
         steps.append(StepDrive(t0, dur, levels, target, rendered(plan.crosstalk_um, levels)))
         for ch in np.flatnonzero(active):
@@ -196,7 +203,6 @@ def build_schedule(pattern: Pattern, plan: PlanFile) -> Schedule:
                 segs.append(Segment(t0 + kick, dur - kick, int(ch), u))
             if brake_ms:
                 segs.append(Segment(t0 + dur, brake_ms, int(ch), -u * ratio))
-        prev_active = active
         start += step.duration_ms + step.gap_ms
     if not math.isfinite(start):
         raise PatternError("step", "the pattern's total duration is not finite")

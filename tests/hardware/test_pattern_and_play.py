@@ -67,13 +67,23 @@ def test_a_channel_driven_twice_needs_the_inter_stimulus_interval():
     plan = plan_from_dict(line_plan())
     steps = [{"sites": [0], "duration_ms": 50.0, "gap_ms": 44.0},
              {"sites": [0, 2], "duration_ms": 50.0}]
-    with pytest.raises(PatternError, match=r"min_isi_ms \(and brake_ms\) = 45") as err:
+    with pytest.raises(PatternError, match=r"channel 0 is driven in steps 0 and 1 44 ms apart;"
+                       r".* min_isi_ms \(and brake_ms\) = 45 ms") as err:
         build_schedule(pattern_from_dict({"step": steps}), plan)
     assert err.value.field == "step[0].gap_ms"
     steps[0]["gap_ms"] = 45.0
     build_schedule(pattern_from_dict({"step": steps}), plan)
     steps[1]["sites"] = [2]  # another channel: no interval needed
     steps[0]["gap_ms"] = 0.0
+    build_schedule(pattern_from_dict({"step": steps}), plan)
+    # a step of another channel in between does not reset the interval
+    steps = [{"sites": [0], "duration_ms": 50.0},
+             {"sites": [2], "duration_ms": 20.0, "gap_ms": 20.0},
+             {"sites": [0], "duration_ms": 50.0}]
+    with pytest.raises(PatternError, match="steps 0 and 2 40 ms apart") as err:
+        build_schedule(pattern_from_dict({"step": steps}), plan)
+    assert err.value.field == "step[2]"
+    steps[1]["gap_ms"] = 25.0
     build_schedule(pattern_from_dict({"step": steps}), plan)
 
 
