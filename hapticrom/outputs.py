@@ -41,3 +41,32 @@ def atomic_path(target: str | os.PathLike) -> Iterator[Path]:
         os.replace(tmp_path, target)
     finally:
         tmp_path.unlink(missing_ok=True)
+
+
+def check_output_dir(option: str, target: str | os.PathLike) -> None:
+    """Raise ValueError naming ``option`` unless ``target`` can be an output directory: it is
+    a directory already, or it does not exist and its parent does."""
+    path = Path(target)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{option} {target}: exists and is not a directory")
+    if not path.resolve().parent.is_dir():
+        raise ValueError(f"{option} {target}: the directory {path.parent} does not exist")
+
+
+@contextlib.contextmanager
+def atomic_dir(target: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary directory beside ``target``; when the block succeeds, create
+    ``target`` if needed and move every file into it (each by an atomic rename); when the block
+    raises, delete the temporary directory and leave ``target`` as it was."""
+    import shutil
+
+    target = Path(target)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.resolve().parent))
+    try:
+        yield tmp
+        target.mkdir(exist_ok=True)
+        for f in sorted(tmp.iterdir()):
+            os.chmod(f, _file_mode())
+            os.replace(f, target / f.name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

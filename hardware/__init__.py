@@ -1,0 +1,33 @@
+"""Driving a planned array: the device interface and its back ends (``serial``, ``sim``,
+``log``), the frame protocol, the pattern file, and the host-side safety limits.
+
+    from hardware import build_schedule, load_pattern, load_plan, open_device
+    plan = load_plan("out/plan.json")
+    schedule = build_schedule(load_pattern("examples/pattern-sweep.toml"), plan)
+    with open_device("sim", plan, Path("out/play")) as dev:
+        dev.play(schedule)
+
+The run-time path only: numpy, onnxruntime (through ``surrogate.runtime``), pyserial for the
+serial port, matplotlib for the simulated array's figures; never the FE solver, torch,
+scikit-learn or pysindy (an import-linter contract).
+"""
+
+from hardware.backends import DEVICE_KINDS, open_device, parse_device
+from hardware.device import Device, DeviceError
+from hardware.heartbeat import Heartbeat
+from hardware.pattern import Pattern, PatternError, Step, load_pattern, pattern_from_dict
+from hardware.safety import ExposureMeter, SafetyError, SafetyLimits
+from hardware.schedule import (
+    TIMING_KEYS,
+    PlanFile,
+    PlanFileError,
+    Schedule,
+    build_schedule,
+    load_plan,
+    plan_from_dict,
+)
+
+__all__ = ["DEVICE_KINDS", "TIMING_KEYS", "Device", "DeviceError", "ExposureMeter", "Heartbeat",
+           "Pattern", "PatternError", "PlanFile", "PlanFileError", "SafetyError",
+           "SafetyLimits", "Schedule", "Step", "build_schedule", "load_pattern", "load_plan",
+           "open_device", "parse_device", "pattern_from_dict", "plan_from_dict"]

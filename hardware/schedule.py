@@ -1,0 +1,210 @@
+"""A pattern bound to a plan: drive levels per step and the timed schedule of channel segments.
+
+Per step, the target amplitude of site i is its intensity times the site's own amplitude at
+the nominal level (the plan's crosstalk matrix diagonal, C[i, i]); the channel levels are the
+bounded least-squares drive of :func:`planner.drive_levels` (levels in [0, 1], 1 = nominal).
+
+Timing comes from the plan's ``timing`` object (the transient model, ``planner.timing``):
+each driven channel gets an overdrive kick of ``overdrive_ms`` at ``overdrive_level`` times its
+level (the kick's ratio to the steady drive is kept at lower levels: an approximation for a
+motor whose speed is not linear in voltage), the steady level for the rest of the step, then
+a brake pulse of reverse drive at the same ratio for ``brake_ms``. Two stimuli of one channel
+(in successive steps or with other steps between) need at least ``min_isi_ms`` (and
+``brake_ms``) from the end of one to the start of the next (the shortest inter-stimulus
+interval at which the residual vibration has died out); a shorter interval is an error naming
+the step.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fieldspec import FieldError
+from hardware.pattern import Pattern, PatternError
+from hardware.protocol import Segment
+from planner.drive import drive_levels, rendered
+
+__all__ = ["ACTIVE_LEVEL", "TIMING_KEYS", "PlanFile", "PlanFileError", "Schedule", "StepDrive",
+           "build_schedule", "load_plan", "plan_from_dict"]
+
+TIMING_KEYS = ("rise_ms", "decay_ms", "overdrive_ms", "overdrive_level", "brake_ms",
+               "min_isi_ms")
+ACTIVE_LEVEL = 1.0 / 4096  # below one protocol level step a channel counts as off
+
+
+class PlanFileError(FieldError):
+    """A plan JSON that cannot be played (``.field`` names the key)."""
+
+
+@dataclass(frozen=True)
+class PlanFile:
+    """What ``play`` needs from a plan: the array, its crosstalk and the unit's timing."""
+
+    data: dict[str, Any]
+    crosstalk_um: NDArray  # C[i, j]: amplitude at site i of unit j at the nominal level [um]
+    positions_mm: NDArray
+    frequency_hz: float
+    timing: dict[str, float]
+
+    @property
+    def n_sites(self) -> int:
+        return len(self.crosstalk_um)
+
+
+def plan_from_dict(d: Any) -> PlanFile:
+    """Validate a plan mapping (``hapticrom plan --out``)."""
+    if not isinstance(d, dict) or d.get("format") != "hapticrom-plan":
+        raise PlanFileError("format", "not a hapticrom plan (format != 'hapticrom-plan')")
+    if d.get("best") is None:
+        raise PlanFileError("best", "the plan has no feasible design (best = null): nothing "
+                            "to play; re-plan with wider pitch bounds or another criterion")
+    try:
+        C = np.asarray(d["crosstalk_um"], dtype=float)
+        pos = np.asarray(d["positions_mm"], dtype=float)
+        freq = float(d["best_frequency_hz"])
+    except (KeyError, TypeError, ValueError) as err:
+        raise PlanFileError(str(err).strip("'"), f"plan: missing or malformed {err}") from None
+    if C.ndim != 2 or C.shape[0] != C.shape[1] or not C.size or not np.all(np.isfinite(C)) \
+            or np.any(C < 0) or np.any(np.diag(C) <= 0):
+        raise PlanFileError("crosstalk_um", "plan.crosstalk_um: expected a square matrix of "
+                            "amplitudes >= 0 um with a positive diagonal")
+    if pos.shape != (len(C), 2):
+        raise PlanFileError("positions_mm", f"plan.positions_mm: expected {len(C)} x 2 "
+                            "site positions")
+    if "timing" not in d:
+        raise PlanFileError("timing", "the plan has no 'timing' (rise, decay, overdrive, "
+                            "brake, inter-stimulus interval from the transient model): re-plan "
+                            "it with the current `hapticrom plan` so that it carries the timing")
+    t = d["timing"]
+    if t is None or (isinstance(t, dict) and t.get("unavailable")):
+        why = f" ({t['unavailable']})" if t else ""
+        raise PlanFileError("timing", f"the plan's timing is unavailable{why}: play needs the "
+                            "unit's rise, decay, overdrive, brake and inter-stimulus interval; "
+                            "re-plan with a drive frequency and model the timing can be "
+                            "computed for")
+    if not isinstance(t, dict):
+        raise PlanFileError("timing", "plan.timing must be an object; re-plan")
+    timing = {}
+    for key in TIMING_KEYS:
+        v = t.get(key)
+        hi = 8.0 if key == "overdrive_level" else 60_000.0
+        lo_ok = v is not None and not isinstance(v, bool) and isinstance(v, int | float) and (
+            v >= 1.0 if key == "overdrive_level" else v >= 0)
+        if not lo_ok or not v <= hi:
+            allowed = "1 <= overdrive_level <= 8" if key == "overdrive_level" else \
+                f"0 <= {key} <= 60000"
+            raise PlanFileError(f"timing.{key}", f"plan.timing.{key} = {v!r}: expected a "
+                                f"number, allowed {allowed}; re-plan to refresh the timing")
+        timing[key] = float(v)
+    return PlanFile(d, C, pos, freq, timing)
+
+
+def load_plan(path: str | Path) -> PlanFile:
+    try:
+        data = json.loads(Path(path).read_text())
+    except OSError as err:
+        raise PlanFileError("<file>", f"cannot read plan {str(path)!r}: {err}") from None
+    except json.JSONDecodeError as err:
+        raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
+    return plan_from_dict(data)
+
+
+@dataclass(frozen=True)
+class StepDrive:
+    """One step bound to the plan: when, the channel levels, target and rendered site
+    amplitudes [um]."""
+
+    start_ms: int
+    duration_ms: int
+    levels: NDArray
+    target_um: NDArray
+    rendered_um: NDArray
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The steps and the channel segments a device plays (times in ms from the start)."""
+
+    n_channels: int
+    frequency_hz: float
+    timing: dict[str, float]
+    steps: tuple[StepDrive, ...]
+    segments: tuple[Segment, ...]
+
+    @property
+    def total_ms(self) -> int:
+        ends = [s.t_ms + s.duration_ms for s in self.segments]
+        ends += [s.start_ms + s.duration_ms for s in self.steps]
+        return max(ends, default=0)
+
+
+def _targets(pattern: Pattern, plan: PlanFile) -> NDArray:
+    n = plan.n_sites
+    own = np.diag(plan.crosstalk_um)
+    rows = []
+    for k, step in enumerate(pattern.steps):
+        if step.intensities is not None:
+            if len(step.intensities) != n:
+                raise PatternError(f"step[{k}].intensities", f"step[{k}].intensities has "
+                                   f"{len(step.intensities)} values: the plan has {n} sites")
+            x = np.asarray(step.intensities, dtype=float)
+        else:
+            bad = [s for s in step.sites if s >= n]
+            if bad:
+                raise PatternError(f"step[{k}].sites", f"step[{k}].sites: site {bad[0]} does "
+                                   f"not exist; allowed 0 <= site <= {n - 1}")
+            x = np.zeros(n)
+            x[list(step.sites)] = step.intensity
+        rows.append(x * own)
+    return np.array(rows)
+
+
+def build_schedule(pattern: Pattern, plan: PlanFile) -> Schedule:
+    """Levels for every step and the timed segments (overdrive, steady, brake)."""
+    t = plan.timing
+    od_ms, brake_ms = round(t["overdrive_ms"]), round(t["brake_ms"])
+    ratio = t["overdrive_level"]
+    steps: list[StepDrive] = []
+    segs: list[Segment] = []
+    start = 0.0
+    min_gap = max(t["min_isi_ms"], t["brake_ms"])
+    last_end = np.full(plan.n_sites, -np.inf)  # end of each channel's last stimulus [ms]
+    last_step = np.zeros(plan.n_sites, dtype=int)
+    for k, (step, target) in enumerate(zip(pattern.steps, _targets(pattern, plan), strict=True)):
+        sol = drive_levels(plan.crosstalk_um, target)
+        levels = np.where(sol.levels >= ACTIVE_LEVEL, sol.levels, 0.0)
+        active = levels > 0
+        soon = active & (start - last_end < min_gap - 1e-9)
+        if np.any(soon):
+            ch = int(np.flatnonzero(soon)[0])
+            j = int(last_step[ch])
+            field = f"step[{j}].gap_ms" if j == k - 1 else f"step[{k}]"
+            raise PatternError(field, f"{field}: channel {ch} is driven in steps {j} and {k} "
+                               f"{start - last_end[ch]:g} ms apart; successive stimuli of a "
+                               f"channel need at least the plan's min_isi_ms (and brake_ms) = "
+                               f"{min_gap:g} ms between them")
+        last_end[active] = start + step.duration_ms
+        last_step[active] = k
+        t0, dur = round(start), round(step.duration_ms)
+        steps.append(StepDrive(t0, dur, levels, target, rendered(plan.crosstalk_um, levels)))
+        for ch in np.flatnonzero(active):
+            u = float(levels[ch])
+            kick = min(od_ms, dur)
+            if kick:
+                segs.append(Segment(t0, kick, int(ch), u * ratio))
+            if dur > kick:
+                segs.append(Segment(t0 + kick, dur - kick, int(ch), u))
+            if brake_ms:
+                segs.append(Segment(t0 + dur, brake_ms, int(ch), -u * ratio))
+        start += step.duration_ms + step.gap_ms
+    if not math.isfinite(start):
+        raise PatternError("step", "the pattern's total duration is not finite")
+    segs.sort(key=lambda s: (s.t_ms, s.channel))
+    return Schedule(plan.n_sites, plan.frequency_hz, dict(t), tuple(steps), tuple(segs))
