@@ -5,9 +5,9 @@ centre and the edge marked. Transient: left, the time histories of the displacem
 at the centre and at the edge with their envelopes; right, the peak amplitude against radius
 ("peak": the largest |u| of the run at each radius).
 
-The envelope is the running maximum of |u(t)| over one drive period (of the rated motor speed
-for an ERM, of ``analysis.frequency_hz`` for a normal actuator), centred on t: it follows the
-spin-up and spin-down while ignoring the oscillation within a period.
+The envelope joins the successive peaks of |u(t)| (:func:`envelope`): it follows the spin-up
+and spin-down while ignoring the oscillation within a period, also while the motor's frequency
+changes.
 """
 
 from __future__ import annotations
@@ -28,15 +28,17 @@ if TYPE_CHECKING:
 __all__ = ["envelope", "plot_result"]
 
 
-def envelope(t: NDArray, x: NDArray, period: float) -> NDArray:
-    """Running maximum of ``x`` over a window of ``period`` (same unit as ``t``) centred on each
-    sample, t uniformly spaced."""
-    from scipy.ndimage import maximum_filter1d
-
-    if t.size < 2:
-        return np.asarray(x, dtype=float).copy()
-    width = max(1, round(float(period / (t[1] - t[0]))) + 1)
-    return maximum_filter1d(np.asarray(x, dtype=float), size=width, mode="nearest")
+def envelope(t: NDArray, x: NDArray) -> NDArray:
+    """The peak envelope of an oscillation ``x(t)``: straight lines through the successive
+    local maxima of |x| (held flat before the first and after the last). Unlike a fixed window
+    or the Hilbert transform it follows a frequency that drifts (spin-up) and has no end
+    effects."""
+    a = np.abs(np.asarray(x, dtype=float))
+    if a.size < 3:
+        return a
+    inner = np.flatnonzero((a[1:-1] >= a[:-2]) & (a[1:-1] > a[2:])) + 1
+    peaks = np.concatenate([[0], inner, [a.size - 1]])
+    return np.interp(t, t[peaks], a[peaks])
 
 
 def _frequency_text(res: SimulationResult) -> str | None:
@@ -85,33 +87,29 @@ def _steady(path: str, res: SimulationResult, name: str, design: str,
     figstyle.save(fig, path)
 
 
-def _drive_period_s(res: SimulationResult) -> float:
-    s = res.scene
-    f = s.unit.motor.rated_frequency_hz if s.load.kind.value == "unit" else (
-        s.analysis.frequency_hz)
-    return 1.0 / f
-
-
 def _transient(path: str, res: SimulationResult, name: str, design: str,
                freq: str | None) -> None:
     h = res.histories
     n = res.r_mm.size
     t_ms = h.t * 1e3
-    period_ms = _drive_period_s(res) * 1e3
     fig, (ax, bx) = figstyle.figure(1, 2, width_in=10.0, height_in=4.4)
     points = [("centre", n, figstyle.OKABE_ITO[0])]
     if res.edge_mm is not None:
         points.append((f"edge (r = {res.edge_mm:g} mm)", n + 1, figstyle.OKABE_ITO[1]))
     for label, i, colour in points:
-        mag = np.linalg.norm(h.u[:, i], axis=-1) * 1e6
-        ax.plot(t_ms, mag, color=colour, lw=0.6, alpha=0.55, label=f"{label} |u|(t)")
-        ax.plot(t_ms, envelope(t_ms, mag, period_ms), color=colour, lw=1.6,
-                label=f"{label} envelope")
+        k = int(np.argmax(np.abs(h.u[:, i]).max(axis=0)))  # the component that moves most
+        u = h.u[:, i, k] * 1e6
+        env = envelope(t_ms, u)
+        comp = ("u_r", "u_z", "u_t")[k]
+        ax.plot(t_ms, u, color=colour, lw=0.6, alpha=0.6, label=f"{label} {comp}(t)")
+        ax.plot(t_ms, env, color=colour, lw=1.6, label=f"{label} envelope of {comp}")
+        ax.plot(t_ms, -env, color=colour, lw=1.6)
     ax.set_xlabel("time t (ms)")
-    ax.set_ylabel("displacement magnitude |u| (um)")
-    ax.set_title("time histories (theta = 0)")
-    ax.legend()
+    ax.set_ylabel("displacement (um)")
+    ax.set_title("time histories and envelopes (theta = 0)")
+    ax.legend(fontsize=7)
     r_mm, U = res.surface_curve()
+    U = np.abs(U)  # peaks are real and >= 0; stored as complex for the steady layout
     bx.semilogy(r_mm, U[:, 1] * 1e6, label="peak |u_z|")
     bx.semilogy(r_mm, magnitude(U) * 1e6, label="magnitude of peaks")
     if res.edge_mm is not None:
@@ -122,8 +120,8 @@ def _transient(path: str, res: SimulationResult, name: str, design: str,
     bx.legend()
     figstyle.annotate(
         fig, f"{name}: transient", design=design, frequency=freq,
-        plotted="left: |u|(t) = sqrt(u_r^2+u_z^2+u_t^2) in um at the centre (the unit's face "
-        f"at r = 0, z = {res.centre_z_mm:g} mm) and at the edge (skin), with envelopes = "
-        f"running max over one drive period ({period_ms:.3g} ms); right: peak over the run of "
-        "each component against radius on the skin surface, log scale")
+        plotted="left: displacement u(t) in um of the component that moves most, at the centre "
+        f"(the unit's face at r = 0, z = {res.centre_z_mm:g} mm) and at the edge (skin), with "
+        "envelopes through the successive peaks of |u|; right: "
+        "peak over the run against radius on the skin surface, log scale")
     figstyle.save(fig, path)

@@ -134,7 +134,8 @@ class SimulationResult:
                 "transient": "|u| = peak over the run"}[kind]
         lines = [
             f"hapticrom {SOLVER_VERSION}: {kind} analysis"
-            + (f" at {m['frequency_hz']:g} Hz" if kind != "static" else "")
+            + {"harmonic": f" at {m['frequency_hz']:g} Hz", "static": "",
+               "transient": f" (drive frequency {m['frequency_hz']:g} Hz)"}[kind]
             + (f" of {scene_name}" if scene_name else ""),
             f"  elements {m['elements']}, dofs {m['dofs']}, order {self.scene.mesh.order}, "
             f"Fourier modes {m['modes']}, wall time {m['wall_s'] * 1e3:.1f} ms",
@@ -151,7 +152,7 @@ class SimulationResult:
                          f"{abs(u[2]) * 1e6:11.4g} {a * 1e6:11.4g}")
         if self.edge_mm is not None:
             face = ("the unit's skin-side face at r = 0, z = "
-                    f"{self.centre_z_mm:g} mm, not the r = 0 skin row above"
+                    f"{self.centre_z_mm:g} mm; the r = 0 row of the table is the skin under it"
                     if self.centre_z_mm != 0.0 else "the skin at r = 0")
             lines.append(f"  centre magn. {self.center_amplitude_um:.4g} um ({face})")
             lines.append(f"  edge magn. {self.edge_amplitude_um:.4g} um (skin at the footprint "
