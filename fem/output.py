@@ -218,6 +218,9 @@ def _from_v0(doc: dict[str, Any]) -> dict[str, Any]:
             out["surface"][f"{c}_amplitude_um"] = np.abs(U[:, k]).tolist()
     if kind == "transient":
         out["surface"]["magnitude_of_peaks_um"] = out["surface"].pop("magnitude_um")
+        out["profile"] = {"distance_from_edge_mm": out["profile"]["distance_from_edge_mm"],
+                          "uz_peak_um": out["profile"]["uz_amplitude_um"],
+                          "magnitude_of_peaks_um": out["profile"]["magnitude_um"]}
         out["definitions"] = {"amplitude": _amplitude_text("transient")}
         h = doc["histories"]
         out["histories"] = {"t_ms": (np.asarray(h["t_s"]) * 1e3).tolist(),

@@ -38,7 +38,12 @@ def run_info(args: argparse.Namespace) -> int:
     from surrogate.data.inspect import dataset_info
 
     info = dataset_info(args.path)
-    print(json.dumps(info, indent=1) if args.json else format_info(info))
+    if args.json:
+        from hapticrom.documents import dataset_info_document
+
+        print(json.dumps(dataset_info_document(info), indent=1))
+    else:
+        print(format_info(info))
     return 0
 
 
