@@ -1,6 +1,8 @@
 """``hapticrom dataset info|validate|merge``: inspect, check and combine datasets.
 
-``validate`` exits 0 for a valid dataset and 2 (bad input) with the list of problems.
+Exit codes (the policy of :mod:`hapticrom.cli`): ``validate`` exits 0 for a valid dataset and
+2 (bad input) with the list of problems; ``info`` exits 2 for a damaged or missing dataset,
+like every command given bad input.
 """
 
 from __future__ import annotations

@@ -270,7 +270,8 @@ def _execute(store: Store, todo: list[Planned], solver: Mapping[str, Any], backe
         last_flush = time.monotonic()
 
     bar = tqdm(total=total, initial=report.already_done, unit="sample", dynamic_ncols=True,
-               disable=not progress, file=sys.stderr, smoothing=0.05, desc=store.path.name)
+               disable=None if progress else True,  # None: drawn only on a terminal
+               file=sys.stderr, smoothing=0.05, desc=store.path.name)
     try:
         while queue or pending:
             while queue and len(pending) < 2 * backend.workers + 1:
