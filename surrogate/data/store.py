@@ -3,7 +3,8 @@
 Layout::
 
     DIR/_manifest.json          schema version, space, sampling, solver, mesh, runs
-    DIR/_lock                   advisory lock held by the one process writing DIR
+    DIR/_lock                   advisory lock held by the one process writing DIR (deleted
+                                when it finishes, also after a failure)
     DIR/part-000001.parquet     immutable data parts (zstd), written atomically
     DIR/.part-000002.parquet.tmp   a part being written (or left by a killed run)
 
@@ -225,19 +226,33 @@ class Store:
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[None]:
-        """Hold the dataset's advisory write lock (released by the OS even on kill -9)."""
-        fh = open(self.path / LOCK_NAME, "a+")
-        try:
+        """Hold the dataset's advisory write lock (released by the OS even on kill -9). The
+        lock file is deleted on release, success or failure, so no ``_lock`` is left behind;
+        a lock taken on a file another process has just deleted is retaken on the new one."""
+        path = self.path / LOCK_NAME
+        while True:
+            fh = open(path, "a+")
             try:
                 fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError as err:
+                fh.close()
                 if err.errno in (errno.EAGAIN, errno.EACCES):
                     raise DatasetError(str(self.path), f"{self.path} is being written by "
                                        "another process (lock held); wait for it to finish"
                                        ) from None
                 raise
+            try:
+                same = os.stat(path).st_ino == os.fstat(fh.fileno()).st_ino
+            except FileNotFoundError:  # the holder before us deleted it as we opened it
+                same = False
+            if same:
+                break
+            fh.close()
+        try:
             yield
         finally:
+            with contextlib.suppress(FileNotFoundError):
+                path.unlink()  # while still locked: nobody can hold a lock on this inode
             fh.close()
 
     # ---- parts
