@@ -46,7 +46,8 @@ def main() -> None:
             if out.returncode != 0 or not out.stdout.strip():
                 sys.exit(f"run {i} failed: {out.stderr[-2000:]}")
             times.append(float(out.stdout.split()[-1]))
-    print(f"generate start-up to the first dispatched sample: median {statistics.median(times):.2f} s "
+    med = statistics.median(times)
+    print(f"generate start-up to the first dispatched sample: median {med:.2f} s "
           f"(min {min(times):.2f}, max {max(times):.2f}, {args.runs} runs; target < 2 s)")
 
 

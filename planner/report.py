@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+import figstyle
 from planner.optimise import PITCH_TOL_MM, Plan
 
 __all__ = ["plan_to_dict", "write_plan_plot"]
@@ -48,19 +49,16 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
 def write_plan_plot(plan: Plan, path: str | Path) -> None:
     """Left: the array (sites coloured by leakage ratio, unit outlines); right: each
     candidate's amplitude against distance from its centre, with the criterion."""
-    import matplotlib
+    from matplotlib.patches import Circle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fig, (ax, bx) = figstyle.figure(1, 2, width_in=11, height_in=5.2)
     best = plan.best
     if best is not None:
         pos = plan.positions_mm
         sc = ax.scatter(pos[:, 0], pos[:, 1], c=plan.ratios, cmap="viridis", zorder=3,
                         vmin=0, vmax=plan.request.criterion.max_ratio)
         for x, y in pos:
-            ax.add_patch(plt.Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
+            ax.add_patch(Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
         fig.colorbar(sc, ax=ax, label="leakage / own amplitude")
         ax.set_title(f"{best.name} at {best.frequency_hz:g} Hz: pitch {best.pitch_mm:.2f} mm")
     else:
@@ -77,6 +75,12 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
     bx.set_xlabel("distance from unit centre [mm]")
     bx.set_ylabel("amplitude / own center amplitude")
     bx.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    figstyle.annotate(
+        fig, "Array plan", design=("best: " + best.name) if best is not None else
+        "no design meets the criterion",
+        frequency=", ".join(sorted({f"{c.frequency_hz:g} Hz" for c in plan.candidates})),
+        plotted="left: unit sites (mm) coloured by the leakage ratio (neighbours' amplitude / "
+        "own centre amplitude); right: each candidate's predicted skin amplitude against "
+        "distance from its centre, relative to its own centre amplitude (the unit's face), "
+        "with the criterion")
+    figstyle.save(fig, path)
