@@ -30,15 +30,15 @@ __all__ = ["envelope", "plot_result"]
 
 def envelope(t: NDArray, x: NDArray) -> NDArray:
     """The peak envelope of an oscillation ``x(t)``: straight lines through the successive
-    local maxima of |x| (held flat before the first and after the last). Unlike a fixed window
-    or the Hilbert transform it follows a frequency that drifts (spin-up) and has no end
+    local maxima of |x| (and its end values), never below |x| itself. Unlike a fixed window or
+    the Hilbert transform it follows a frequency that drifts (spin-up) and has no end
     effects."""
     a = np.abs(np.asarray(x, dtype=float))
     if a.size < 3:
         return a
     inner = np.flatnonzero((a[1:-1] >= a[:-2]) & (a[1:-1] > a[2:])) + 1
     peaks = np.concatenate([[0], inner, [a.size - 1]])
-    return np.interp(t, t[peaks], a[peaks])
+    return np.maximum(np.interp(t, t[peaks], a[peaks]), a)
 
 
 def _frequency_text(res: SimulationResult) -> str | None:
