@@ -132,10 +132,10 @@ class SimulationResult:
         what = {"harmonic": "|U| = modulus of the complex Fourier amplitude",
                 "static": "|u| = static displacement",
                 "transient": "|u| = peak over the run"}[kind]
+        freq = ("" if kind == "static" else f" at {m['frequency_hz']:g} Hz" if kind == "harmonic"
+                else f" (drive frequency {m['frequency_hz']:g} Hz)")
         lines = [
-            f"hapticrom {SOLVER_VERSION}: {kind} analysis"
-            + {"harmonic": f" at {m['frequency_hz']:g} Hz", "static": "",
-               "transient": f" (drive frequency {m['frequency_hz']:g} Hz)"}[kind]
+            f"hapticrom {SOLVER_VERSION}: {kind} analysis{freq}"
             + (f" of {scene_name}" if scene_name else ""),
             f"  elements {m['elements']}, dofs {m['dofs']}, order {self.scene.mesh.order}, "
             f"Fourier modes {m['modes']}, wall time {m['wall_s'] * 1e3:.1f} ms",

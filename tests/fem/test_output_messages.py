@@ -39,8 +39,9 @@ def test_an_explicit_inertia_false_is_named_as_written():
     assert "effects.inertia = false" in str(err.value)
 
 
-def _forearm(**output):
+def _forearm(kind="harmonic", **output):
     d = scene_to_dict(load_scene("examples/forearm.toml"))
+    d["analysis"]["kind"] = kind
     d["mesh"].update(COARSE)
     d["tissue"]["radius_mm"] = 20.0
     d["output"].update(output)
@@ -65,6 +66,9 @@ def test_summary_defines_centre_edge_and_what_the_columns_are():
     assert "|U| = modulus of the complex Fourier amplitude" in text
     assert "centre magn." in text and "(the skin at r = 0)" in text
     assert "normalized edge = edge / centre" in text
+    static = simulate(_forearm("static", radii_mm=[0.0, 4.0])).summary("s.toml")
+    assert static.splitlines()[0].endswith(": static analysis of s.toml")
+    assert "|u| = static displacement" in static
 
 
 def test_summary_of_a_unit_on_pins_says_the_centre_is_its_face_not_the_skin_row():
