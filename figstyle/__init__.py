@@ -25,7 +25,7 @@ __all__ = ["OKABE_ITO", "RC", "annotate", "caption_text", "figure", "save", "sty
 #: cycle (Okabe & Ito 2008, "Color Universal Design", https://jfly.uni-koeln.de/color/).
 RC: dict[str, Any] = {
     "figure.dpi": 100,
-    "savefig.dpi": 110,
+    "savefig.dpi": 100,
     "font.size": 9,
     "axes.titlesize": 10,
     "axes.labelsize": 9,
@@ -104,6 +104,9 @@ def save(fig: Any, path: str | os.PathLike, **kwargs: Any) -> None:
     """Write the figure (PNG unless the suffix says otherwise) and close it. ``format`` is
     taken from the suffix of ``path`` when it has one, so temporary names work too."""
     plt = _pyplot()
+    fmt = kwargs.get("format") or os.path.splitext(os.fspath(path))[1].lstrip(".").lower()
+    if fmt in ("", "png"):
+        kwargs.setdefault("pil_kwargs", {"optimize": True})  # smaller files, same pixels
     with style():
         fig.savefig(path, **kwargs)
     plt.close(fig)
