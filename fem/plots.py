@@ -118,6 +118,7 @@ def _transient(path: str, res: SimulationResult, name: str, design: str,
     bx.set_ylabel("peak amplitude over the run (um)")
     bx.set_title("peak amplitude against radius")
     bx.legend()
+    figstyle.plain_log_ticks(bx)
     figstyle.annotate(
         fig, f"{name}: transient", design=design, frequency=freq,
         plotted="left: displacement u(t) in um of the component that moves most, at the centre "

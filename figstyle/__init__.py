@@ -19,7 +19,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["OKABE_ITO", "RC", "annotate", "caption_text", "figure", "save", "style"]
+__all__ = ["OKABE_ITO", "RC", "annotate", "caption_text", "figure", "plain_log_ticks", "save",
+           "style"]
 
 #: matplotlib rcParams of every figure: small sans-serif text, light grid, colour-blind safe
 #: cycle (Okabe & Ito 2008, "Color Universal Design", https://jfly.uni-koeln.de/color/).
@@ -98,6 +99,20 @@ def annotate(fig: Any, title: str, *, design: str | None, frequency: str | None,
     bottom = min(0.4, 0.05 + 0.035 * len(lines) * 4.2 / fig.get_figheight())
     with style():
         fig.tight_layout(rect=(0, bottom, 1, 0.95))
+
+
+def plain_log_ticks(ax: Any) -> None:
+    """Label a log y axis with plain numbers (2, 5, 10) instead of 2x10^0 and 5x10^0; minor
+    ticks are labelled only when the axis spans less than two decades (call after plotting)."""
+    import math
+
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    fmt = FuncFormatter(lambda v, _: f"{v:g}")
+    ax.yaxis.set_major_formatter(fmt)
+    lo, hi = ax.get_ylim()
+    narrow = lo > 0 and math.log10(hi / lo) < 2
+    ax.yaxis.set_minor_formatter(fmt if narrow else NullFormatter())
 
 
 def save(fig: Any, path: str | os.PathLike, **kwargs: Any) -> None:
