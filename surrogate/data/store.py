@@ -35,12 +35,10 @@ from __future__ import annotations
 import contextlib
 import copy
 import datetime as _dt
-import errno
-import fcntl
 import json
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +48,7 @@ import pyarrow.parquet as pq
 
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_digest, manifest_problems, part_problems
+from surrogate.data.lockfile import exclusive
 from surrogate.data.space import Space, space_from_dict
 
 __all__ = [
@@ -224,36 +223,10 @@ class Store:
 
     # ---- locking
 
-    @contextlib.contextmanager
-    def lock(self) -> Iterator[None]:
-        """Hold the dataset's advisory write lock (released by the OS even on kill -9). The
-        lock file is deleted on release, success or failure, so no ``_lock`` is left behind;
-        a lock taken on a file another process has just deleted is retaken on the new one."""
-        path = self.path / LOCK_NAME
-        while True:
-            fh = open(path, "a+")
-            try:
-                fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as err:
-                fh.close()
-                if err.errno in (errno.EAGAIN, errno.EACCES):
-                    raise DatasetError(str(self.path), f"{self.path} is being written by "
-                                       "another process (lock held); wait for it to finish"
-                                       ) from None
-                raise
-            try:
-                same = os.stat(path).st_ino == os.fstat(fh.fileno()).st_ino
-            except FileNotFoundError:  # the holder before us deleted it as we opened it
-                same = False
-            if same:
-                break
-            fh.close()
-        try:
-            yield
-        finally:
-            with contextlib.suppress(FileNotFoundError):
-                path.unlink()  # while still locked: nobody can hold a lock on this inode
-            fh.close()
+    def lock(self) -> contextlib.AbstractContextManager[None]:
+        """Hold the dataset's advisory write lock (released by the OS even on kill -9; the
+        lock file is deleted on release: :func:`surrogate.data.lockfile.exclusive`)."""
+        return exclusive(self.path / LOCK_NAME, self.path)
 
     # ---- parts
 
