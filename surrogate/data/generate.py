@@ -54,7 +54,7 @@ from surrogate.data.errors import DatasetError, SpaceError
 from surrogate.data.plan import Planned, PlanStats, plan_samples
 from surrogate.data.pool import cpu_count, one_blas_thread
 from surrogate.data.provenance import same_solver, solver_info
-from surrogate.data.space import Space, load_space
+from surrogate.data.space import Space, check_space, load_space
 from surrogate.data.store import FEM_SOURCE, Store, new_manifest, utc_now
 
 __all__ = ["GenerateReport", "RunnerError", "generate"]
@@ -154,8 +154,9 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
     before anything is written: bad input raises :class:`SpaceError` or
     :class:`DatasetError` and leaves the disk untouched."""
     _check_args(n, workers, chunk, flush_every, flush_seconds, scheduler)
-    if not isinstance(space, Space):
-        space = load_space(space)
+    checked = isinstance(space, Space)  # a Space object was checked when it was built
+    if not checked:
+        space = load_space(space, check_scenes=False)  # checked below, after the head start
     out = Path(out)
     store = None
     if Store.exists(out):
@@ -170,7 +171,10 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
             if own:
                 backend = PoolBackend(workers or cpu_count())  # spawns at the first submit
             head = _head_start(space, int(n), store, backend, chunk) if only is None else {}
-        # while the head start runs: the solver's identity, the checks and the whole plan
+        # while the head start runs: the space's scene check, the solver's identity, the
+        # dataset's compatibility and the whole plan; any failure cancels the head start
+        if not checked:
+            check_space(space)
         solver = solver_info()
         if store is not None:
             _check_compatible(store, space, solver, allow_solver_change)
@@ -202,7 +206,10 @@ def _head_start(space: Space, n: int, store: Store | None, backend: Any,
     validated: a failing plan cancels these futures and their results are dropped. Samples
     the dataset already holds are not submitted."""
     size = _chunk_size(chunk, n, backend.workers)
-    head, _ = plan_samples(space, min(n, size * backend.workers))
+    try:
+        head, _ = plan_samples(space, min(n, size * backend.workers))
+    except SpaceError:  # no head start: the checks that follow report it in their words
+        return {}
     if store is not None:
         keys, by_index = store.keys()
         done = {sid for src, sid in keys if src == FEM_SOURCE}

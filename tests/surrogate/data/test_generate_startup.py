@@ -3,6 +3,7 @@ runs once, and a plan that fails after the head start writes nothing."""
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 
 import pandas as pd
@@ -13,7 +14,7 @@ import surrogate.data.generate as gen
 from surrogate.data.backends import PoolBackend
 from surrogate.data.errors import SpaceError
 from surrogate.data.plan import plan_samples
-from surrogate.data.space import space_from_dict
+from surrogate.data.space import load_space, space_from_dict
 
 
 def test_every_sample_is_submitted_once_and_the_head_goes_first(tmp_path: Path, monkeypatch):
@@ -75,3 +76,21 @@ def test_resume_does_not_resubmit_stored_samples(tmp_path: Path, monkeypatch):
     monkeypatch.setattr(PoolBackend, "submit", submit)
     rep = gen.generate(space, 6, tmp_path / "d", workers=1, chunk=2, progress=False)
     assert (rep.already_done, rep.new) == (4, 2) and sum(count) == 2
+
+
+def test_a_space_failing_its_scene_check_after_the_head_start_writes_nothing(tmp_path: Path):
+    """A space file is checked after the head start is submitted (to start sooner); its error
+    is the checker's and the disk is untouched."""
+    from test_generate import _toml
+
+    d = copy.deepcopy(SPACE)
+    d["parameter"].append({"name": "probe_9", "type": "continuous",
+                           "path": "output.radii_mm[9]", "low": 1.0, "high": 2.0})
+    path = tmp_path / "bad.toml"
+    path.write_text(_toml(d))
+    with pytest.raises(SpaceError) as checked:
+        load_space(path)  # the check a space file always gets
+    with pytest.raises(SpaceError) as err:
+        gen.generate(path, 4, tmp_path / "d", workers=1, chunk=2, progress=False)
+    assert str(err.value) == str(checked.value) and "radii_mm" in str(err.value)
+    assert not (tmp_path / "d").exists()
