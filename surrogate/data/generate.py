@@ -166,6 +166,7 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
                            "directory)")
     own = scheduler is None
     backend: Any = DaskBackend(scheduler) if not own else None
+    t_head = time.perf_counter()  # the rate counts from the head start: it is part of the run
     try:
         with one_blas_thread() if own else contextlib.nullcontext():
             if own:
@@ -187,8 +188,9 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
             store = Store.create(out, space, **new_manifest(space, solver))
         with store.lock():
             store.remove_temp_files()
-            return _run(store, space, planned, stats, solver, backend, own, head, chunk,
-                        flush_every, flush_seconds, progress, allow_solver_change, command)
+            return _run(store, space, planned, stats, solver, backend, own,
+                        (head, t_head) if head else None, chunk, flush_every, flush_seconds,
+                        progress, allow_solver_change, command)
     finally:
         if backend is not None:
             backend.close(cancel=True)
@@ -239,7 +241,8 @@ def _todo(store: Store, planned: Sequence[Planned], allow_solver_change: bool) -
 
 def _run(store: Store, space: Space, planned: list[Planned], stats: PlanStats,
          solver: Mapping[str, Any], backend: Any, own_backend: bool,
-         head: dict[Any, list[Planned]], chunk: int | None, flush_every: int,
+         head_start: tuple[dict[Any, list[Planned]], float] | None, chunk: int | None,
+         flush_every: int,
          flush_seconds: float, progress: bool, allow_solver_change: bool,
          command: str) -> GenerateReport:
     m = store.manifest
@@ -265,7 +268,7 @@ def _run(store: Store, space: Space, planned: list[Planned], stats: PlanStats,
     with one_blas_thread() if own_backend else contextlib.nullcontext():
         report.backend, report.workers = backend.name, backend.workers
         run.update(backend=backend.name, workers=backend.workers)
-        t0 = time.perf_counter()
+        head, t0 = head_start or ({}, time.perf_counter())
         try:
             _execute(store, todo, solver, backend, chunk, flush_every, flush_seconds, progress,
                      report, head)
