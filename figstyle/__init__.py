@@ -19,8 +19,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
-__all__ = ["OKABE_ITO", "RC", "annotate", "caption_text", "figure", "plain_log_ticks", "save",
-           "style"]
+__all__ = ["OKABE_ITO", "RC", "annotate", "caption_text", "color", "figure", "plain_log_ticks",
+           "save", "style"]
 
 #: matplotlib rcParams of every figure: small sans-serif text, light grid, colour-blind safe
 #: cycle (Okabe & Ito 2008, "Color Universal Design", https://jfly.uni-koeln.de/color/).
@@ -44,6 +44,12 @@ RC: dict[str, Any] = {
 }
 OKABE_ITO = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442",
              "#000000")
+
+
+def color(i: int) -> str:
+    """The i-th colour of the project's cycle (use instead of matplotlib's "C0", "C1", ...,
+    which name the default palette wherever a figure is drawn)."""
+    return OKABE_ITO[i % len(OKABE_ITO)]
 
 
 def _pyplot():

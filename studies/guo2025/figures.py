@@ -52,7 +52,7 @@ def _profile_axes(ax, title: str) -> None:
 def fig_single_layers(r: Mapping[str, Solved], path: Path) -> None:
     fig, ax = figstyle.figure(height_in=4.8)
     for i, c in enumerate(LETTERS):
-        s, col = r[f"single/{c}"], f"C{i}"
+        s, col = r[f"single/{c}"], figstyle.color(i)
         ax.plot(s.profile_mm, s.normalized_profile(), color=col, label=f"{c} magnitude")
         ax.plot(s.profile_mm, s.normalized_profile(True), "--", color=col, label=f"{c} abs U_z")
     ax.axhspan(*PAPER_SINGLE_RANGE, color="grey", alpha=0.2, label="paper: edge 50-58 %")
@@ -67,7 +67,7 @@ def fig_triples(r: Mapping[str, Solved], triples: Sequence[str], path: Path) -> 
     fig, (ax, bx) = figstyle.figure(1, 2, width_in=11, height_in=4.9)
     picks = list(dict.fromkeys([order[0], "ACD", order[-1]]))
     for i, t in enumerate(picks):
-        s, col = r[f"triple/{t}"], f"C{i}"
+        s, col = r[f"triple/{t}"], figstyle.color(i)
         ax.plot(s.profile_mm, s.normalized_profile(), color=col, label=f"{design(t)} magnitude")
         ax.plot(s.profile_mm, s.normalized_profile(True), "--", color=col,
                 label=f"{design(t)} abs U_z")
@@ -77,13 +77,14 @@ def fig_triples(r: Mapping[str, Solved], triples: Sequence[str], path: Path) -> 
     vals = [r[f"triple/{t}"].norm for t in order]
     vals_z = [r[f"triple/{t}"].norm_z for t in order]
     x = np.arange(len(order))
-    bx.bar(x, vals, color=["C3" if t == "ACD" else "C0" for t in order], label="magnitude")
+    bx.bar(x, vals, color=[figstyle.color(1) if t == "ACD" else figstyle.color(0)
+                           for t in order], label="magnitude")
     bx.plot(x, vals_z, "k.", ms=4, label="abs U_z")
     bx.axhline(PAPER_TRIPLE_MIN, color="k", lw=0.8, ls=":")
     bx.axhline(PAPER_TRIPLE_MAX, color="k", lw=0.8, ls=":")
     bx.set_xticks(x, [t for t in order], rotation=90, fontsize=6 if len(order) > 16 else 8)
     bx.set_ylabel("normalized edge amplitude")
-    bx.set_title("All triples, ranked (A-C-D in red)", fontsize=10)
+    bx.set_title("All triples, ranked (A-C-D in vermillion)", fontsize=10)
     bx.legend(fontsize=7)
     _finish(fig, path, "Three rings: skin profile and normalized edge amplitude",
             "reverse motor on pogo pins, three 1 mm rings (letters: materials inner to outer)",
@@ -97,14 +98,14 @@ def fig_sweeps(r: Mapping[str, Solved], sweeps: Mapping[str, Sequence[float]],
     for ax, (name, values) in zip(np.atleast_1d(axes), sweeps.items(), strict=True):
         sols = [r[uniform_name(*sweep_point(name, x))] for x in values]
         label, unit, table = sweep_label(name)
-        ax.plot(values, [s.edge_um for s in sols], "o-", color="C0")
-        ax.set_ylabel("edge amplitude (um)", color="C0")
+        ax.plot(values, [s.edge_um for s in sols], "o-", color=figstyle.color(0))
+        ax.set_ylabel("edge amplitude (um)", color=figstyle.color(0))
         ax.set_xlabel(f"{label} ({unit})")
         if name == "E":
             ax.set_xscale("log")
         tw = ax.twinx()
-        tw.plot(values, [s.norm for s in sols], "s--", color="C1", label="magnitude")
-        tw.plot(values, [s.norm_z for s in sols], "^:", color="C2", label="abs U_z")
+        tw.plot(values, [s.norm for s in sols], "s--", color=figstyle.color(1), label="magnitude")
+        tw.plot(values, [s.norm_z for s in sols], "^:", color=figstyle.color(2), label="abs U_z")
         tw.set_ylabel("normalized edge")
         tw.legend(fontsize=7)
         ax.set_title(f"{table}: three equal rings", fontsize=10)
@@ -147,7 +148,7 @@ def fig_ring_contact(r: Mapping[str, Solved], triples: Sequence[str], default: s
     for i, c in enumerate(order):
         sols = [r[contact_name(n, c)] for n in names]
         ax.bar(x + (i - (len(order) - 1) / 2) * w, [s.norm for s in sols], w,
-               color=f"C{i}", label=contact_label(c, default) + ", magnitude")
+               color=figstyle.color(i), label=contact_label(c, default) + ", magnitude")
         ax.plot(x + (i - (len(order) - 1) / 2) * w, [s.norm_z for s in sols], "k.", ms=4,
                 label="abs U_z" if i == 0 else None)
     ax.axhspan(*PAPER_SINGLE_RANGE, color="grey", alpha=0.25, label="paper: single 50-58 %")
@@ -173,8 +174,8 @@ def fig_transient(r: Mapping[str, Solved], path: Path) -> None:
     ax.set_title("raw |u(t)| on the theta = 0 meridian", fontsize=10)
     bx.plot(t["t_ms"], t["centre_band_hist_um"], lw=0.8, label="centre, band-passed")
     bx.plot(t["t_ms"], t["edge_band_hist_um"], lw=0.8, label="edge, band-passed")
-    bx.axhline(h.centre_um, color="C0", ls="--", label="centre, harmonic magnitude")
-    bx.axhline(h.edge_um, color="C1", ls="--", label="edge, harmonic magnitude")
+    bx.axhline(h.centre_um, color=figstyle.color(0), ls="--", label="centre, harmonic magnitude")
+    bx.axhline(h.edge_um, color=figstyle.color(1), ls="--", label="edge, harmonic magnitude")
     bx.set_title(f"|u(t)| band-passed {LDV_BAND_HZ[0]:g}-{LDV_BAND_HZ[1]:g} Hz", fontsize=10)
     for a in (ax, bx):
         a.set_xlabel("time (ms)")
