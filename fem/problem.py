@@ -105,6 +105,11 @@ def _check_unit_restrained(scene: Scene, effects: dict[str, bool]) -> None:
            "rings touch it); give it rings with unit.ring_contact = 'frictionless' or 'bonded'")
     for name in ("inertia", "unit_mass"):
         if not effects[name]:
+            if getattr(scene.effects, name) is None and name == "inertia":  # the default
+                raise SceneError("analysis.kind", f"analysis.kind = '{scene.analysis.kind}' "
+                                 "has no inertia (effects.inertia defaults to false for a "
+                                 f"static analysis), which {why}; or solve it with "
+                                 "analysis.kind = 'harmonic'")
             raise SceneError(f"effects.{name}", f"effects.{name} = false {why}")
     if scene.analysis.kind == "transient":
         raise SceneError("unit.ring_contact", f"a transient spin-up {why}: it would drift away")

@@ -1,4 +1,5 @@
-"""Sampling solutions on the skin surface, and writing them (JSON dict, VTK, PNG).
+"""Sampling solutions on the skin surface, and writing the field for ParaView (VTK); the JSON
+document is :mod:`fem.output`, the PNG :mod:`fem.plots`.
 
 Amplitudes are the Fourier amplitudes of the solved mode: U_r and U_z multiply cos(n theta) (the
 theta = 0 meridian), U_t multiplies sin(n theta) (its value at theta = 90 deg for n = 1). The
@@ -72,26 +73,3 @@ def write_vtk(path: str, domain: Domain, nodal: NDArray) -> None:
     data["magnitude_um"] = magnitude(U)
     meshio.write(path, meshio.Mesh(points, cells, point_data=data,
                                    cell_data={"material": [m.material.astype(np.int32)]}))
-
-
-def write_plot(path: str, r_mm: NDArray, U: NDArray, title: str,
-               edge_mm: float | None = None) -> None:
-    """PNG of surface amplitude (um) against radius (mm): |U_z| and the magnitude."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 4), dpi=120)
-    ax.semilogy(r_mm, np.abs(U[:, 1]) * 1e6, label="|u_z|")
-    ax.semilogy(r_mm, magnitude(U) * 1e6, label="magnitude")
-    if edge_mm:
-        ax.axvline(edge_mm, color="0.5", ls="--", lw=0.8, label="edge")
-    ax.set_xlabel("radius (mm)")
-    ax.set_ylabel("surface amplitude (um)")
-    ax.set_title(title)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)

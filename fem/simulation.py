@@ -9,6 +9,7 @@ included and what was skipped.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +40,9 @@ class SimulationResult:
         r_mm: probe radii (mm).
         U: (n_probe, 3) complex Fourier amplitudes (U_r, U_z, U_t) in m at the probe radii.
         edge_mm: radius of the load footprint's edge (mm), None for a point force.
-        center: (3,) amplitudes at r = 0 (m); edge: at edge_mm; profile: (n_profile, 3).
+        center: (3,) amplitudes at the centre (m): r = 0 on the unit's skin-side face, depth
+            ``centre_z_mm`` (the skin itself when glued or without a unit); edge: on the skin
+            at edge_mm; profile: (n_profile, 3).
         profile_mm: distances from the edge of the profile samples (mm).
         meta: dofs, elements, modes, effects, skipped effects, operators built, wall time.
         domain, nodal: the discretisation and nodal amplitudes, for VTK export and plots.
@@ -58,6 +61,7 @@ class SimulationResult:
     nodal: NDArray | None = field(repr=False)
     histories: transient_analysis.Histories | None = field(default=None, repr=False)
     extras: dict = field(default_factory=dict)
+    centre_z_mm: float = 0.0
 
     @property
     def center_amplitude_um(self) -> float | None:
@@ -73,8 +77,15 @@ class SimulationResult:
             return None
         return self.edge_amplitude_um / self.center_amplitude_um
 
-    def to_dict(self) -> dict:
-        """JSON-ready dict: surface amplitudes (um) at the probe radii, unit figures, meta."""
+    def to_dict(self, scene_name: str | None = None) -> dict:
+        """The self-describing JSON document, schema version 1 (:mod:`fem.output`,
+        docs/output-schema.md)."""
+        from .output import result_document
+
+        return result_document(self, scene_name)
+
+    def to_dict_v0(self) -> dict:
+        """The unversioned layout written before schema version 1 (kept for one release)."""
         out = {
             "surface": {
                 "r_mm": self.r_mm.tolist(),
@@ -114,39 +125,54 @@ class SimulationResult:
         nodes = self.domain.surface_nodes()
         return self.domain.mesh.nodes[nodes, 0] * 1e3, self.nodal[nodes]
 
-    def summary(self) -> str:
-        """A short human-readable report."""
+    def summary(self, scene_name: str | None = None) -> str:
+        """A short human-readable report that defines what it prints."""
         m = self.meta
+        kind = self.scene.analysis.kind
+        what = {"harmonic": "|U| = modulus of the complex Fourier amplitude",
+                "static": "|u| = static displacement",
+                "transient": "|u| = peak over the run"}[kind]
+        freq = ("" if kind == "static" else f" at {m['frequency_hz']:g} Hz" if kind == "harmonic"
+                else f" (drive frequency {m['frequency_hz']:g} Hz)")
         lines = [
-            f"hapticrom {SOLVER_VERSION}: {self.scene.analysis.kind} analysis"
-            + (f" at {self.scene.analysis.frequency_hz:g} Hz"
-               if self.scene.analysis.kind == "harmonic" else ""),
+            f"hapticrom {SOLVER_VERSION}: {kind} analysis{freq}"
+            + (f" of {scene_name}" if scene_name else ""),
             f"  elements {m['elements']}, dofs {m['dofs']}, order {self.scene.mesh.order}, "
             f"Fourier modes {m['modes']}, wall time {m['wall_s'] * 1e3:.1f} ms",
             f"  included: {', '.join(m['effects']) or 'none'}",
             f"  skipped:  {', '.join(m['skipped']) or 'none'}",
         ]
-        lines += [f"  {'r (mm)':>8} {'|u_r| um':>11} {'|u_z| um':>11} {'|u_t| um':>11} "
+        lines += [f"  skin surface (z = 0) on the theta = 0 meridian; {what}; "
+                  "magn. = sqrt(|u_r|^2 + |u_z|^2 + |u_t|^2)",
+                  f"  {'r (mm)':>8} {'|u_r| um':>11} {'|u_z| um':>11} {'|u_t| um':>11} "
                   f"{'magn. um':>11}"]
         mag = results.magnitude(self.U)
         for r, u, a in zip(self.r_mm, self.U, mag, strict=True):
             lines.append(f"  {r:8.2f} {abs(u[0]) * 1e6:11.4g} {abs(u[1]) * 1e6:11.4g} "
                          f"{abs(u[2]) * 1e6:11.4g} {a * 1e6:11.4g}")
         if self.edge_mm is not None:
-            lines.append(f"  center {self.center_amplitude_um:.4g} um, edge "
-                         f"({self.edge_mm:g} mm) {self.edge_amplitude_um:.4g} um, normalized "
-                         f"edge {self.normalized_edge:.3f}")
+            face = ("the unit's skin-side face at r = 0, z = "
+                    f"{self.centre_z_mm:g} mm; the r = 0 row of the table is the skin under it"
+                    if self.centre_z_mm != 0.0 else "the skin at r = 0")
+            lines.append(f"  centre magn. {self.center_amplitude_um:.4g} um ({face})")
+            lines.append(f"  edge magn. {self.edge_amplitude_um:.4g} um (skin at the footprint "
+                         f"edge, r = {self.edge_mm:g} mm); normalized edge = edge / centre = "
+                         f"{self.normalized_edge:.3f}")
         if self.histories is not None:
-            lines.append(f"  transient: {self.histories.t.size} recorded steps; amplitudes are "
-                         "peak values over the run")
+            lines.append(f"  transient: {self.histories.t.size} recorded steps; every amplitude "
+                         "is the peak over the run, magn. the magnitude of the peaks")
         for key, value in self.extras.items():
             lines.append(f"  {key}: {value}")
         lines += [f"  warning: {w}" for w in m.get("warnings", [])]
         return "\n".join(lines)
 
 
-def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> SimulationResult:
+def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
+             progress: Callable[[int, int], None] | None = None) -> SimulationResult:
     """Solve a scene and sample the skin surface.
+
+    ``progress(done, total)`` is called with time steps done and the total during a transient
+    (a few hundred times per run; never for a steady solve).
 
     The size is estimated first (:func:`fem.cost.check_cost`): a scene above ``max_unknowns``
     is refused with a :class:`fem.scene.SceneError` naming the fields that drive its size,
@@ -157,12 +183,12 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> Sim
     log = OperatorLog()
     edge = problem.edge
     r_probe = np.asarray(scene.output.radii_m)
-    prof_mm = _profile_distances_mm(scene, edge or 0.0)
+    prof_mm, cut = _profile_distances_mm(scene, edge or 0.0)
     radii = np.concatenate([r_probe, [0.0, edge or 0.0], (edge or 0.0) + prof_mm * 1e-3])
     stencil = _stencil(problem, radii, r_probe.size)
     histories, extras = None, {}
     if scene.analysis.kind == "transient":
-        histories = transient_analysis.run(scene, problem, stencil, radii, log)
+        histories = transient_analysis.run(scene, problem, stencil, radii, log, progress)
         vals = histories.amplitude().astype(complex)
         nodal, n_dofs = None, histories.n_dofs
     else:
@@ -180,14 +206,18 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> Sim
         "dofs": n_dofs, "elements": problem.domain.mesh.n_elements, "modes": [problem.mode],
         "effects": included, "skipped": skipped, "operators": log.built, "wall_s": wall,
         "time_convention": "exp(+i omega t)", "solver_version": SOLVER_VERSION,
+        "frequency_hz": None if scene.analysis.kind == "static"
+        else round(float(drive_omega(scene) / (2 * np.pi)), 9),
     }
-    warning = resolution_warning(scene, problem)
-    if warning:
-        meta["warnings"] = [warning]
+    warnings = [w for w in (resolution_warning(scene, problem), cut) if w]
+    if warnings:
+        meta["warnings"] = warnings
     n = r_probe.size
     edge_mm = None if edge is None else edge * 1e3
+    centre_z_mm = 0.0 if problem.layout is None else float(problem.layout.contact_z * 1e3)
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
-                            prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras)
+                            prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras,
+                            centre_z_mm)
 
 
 def _stencil(problem: Problem, radii: NDArray, center_index: int) -> tuple[NDArray, NDArray]:
@@ -204,12 +234,21 @@ def _stencil(problem: Problem, radii: NDArray, center_index: int) -> tuple[NDArr
     return nodes, weights
 
 
-def _profile_distances_mm(scene: Scene, edge: float) -> NDArray:
-    """Distances from the edge (mm) of the profile, within the meshed radius."""
+def _profile_distances_mm(scene: Scene, edge: float) -> tuple[NDArray, str | None]:
+    """Distances from the edge (mm) of the profile, within the meshed radius, and a warning
+    naming the keys when the requested length had to be cut to the model."""
     out = scene.output
     n = int(np.floor(out.profile_length_mm / out.profile_step_mm + 1e-9))
     d = out.profile_step_mm * np.arange(n + 1)
-    return d[edge + d * 1e-3 <= scene.tissue.radius_m * (1 + 1e-12)]
+    kept = d[edge + d * 1e-3 <= scene.tissue.radius_m * (1 + 1e-12)]
+    if kept.size == d.size:
+        return kept, None
+    room = (scene.tissue.radius_m - edge) * 1e3
+    return kept, (f"output.profile_length_mm = {out.profile_length_mm:g} reaches beyond the "
+                  f"model: cut to {kept[-1] if kept.size else 0.0:g} mm (tissue.radius_mm = "
+                  f"{scene.tissue.radius_m * 1e3:g} less the edge radius "
+                  f"{edge * 1e3:g} mm leaves {room:g} mm); raise tissue.radius_mm or lower "
+                  "output.profile_length_mm")
 
 
 def resolution_warning(scene: Scene, problem: Problem) -> str | None:

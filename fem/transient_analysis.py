@@ -16,6 +16,7 @@ C = (eta / omega_ref) K with the same loss per cycle at the reference frequency.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,9 +104,10 @@ def load_history(scene: Scene, problem: Problem):
 
 
 def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii: NDArray,
-        log: OperatorLog) -> Histories:
+        log: OperatorLog, progress: Callable[[int, int], None] | None = None) -> Histories:
     """Integrate the scene's transient and sample it with ``stencil`` (nodes, weights) at the
-    points whose radii (m) are ``radii``."""
+    points whose radii (m) are ``radii``. ``progress(done, total)`` receives the steps done
+    about 200 times per run."""
     a = scene.analysis
     omega_ref = drive_omega(scene)
     dm, K, M, C = system_matrices(problem, omega_ref, log)
@@ -122,7 +124,8 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
     n_steps = max(1, round(a.duration_ms / a.time_step_ms))
     res = solve_transient(M, K, np.repeat(f[:, None], k, axis=1), history, dt, n_steps, C=C,
                           rho_inf=a.rho_inf, record_dofs=record,
-                          record_every=scene.output.history_every)
+                          record_every=scene.output.history_every,
+                          **_progress_hook(progress, n_steps))
     # full-dof values of the used nodes: (nt, n_used, ndpn, k)
     pos = np.searchsorted(record, np.maximum(masters, 0))
     vals = np.where((masters >= 0)[None, :, None], res.u[:, pos, :], 0.0)
@@ -135,3 +138,12 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
     if k == 2:  # theta = 0 meridian of the rotating load: u_theta from the y column
         u[..., 2] = -at[..., 2, 1]
     return Histories(res.t, np.asarray(radii), u, dm.n_free)
+
+
+def _progress_hook(progress: Callable[[int, int], None] | None, n_steps: int) -> dict:
+    """Keyword arguments of :func:`fem.transient.solve_transient` that report progress
+    through its snapshot callback (the state arrays are ignored)."""
+    if progress is None:
+        return {}
+    return {"on_snapshot": lambda step, *_: progress(int(step), n_steps),
+            "snapshot_every": max(1, n_steps // 200)}

@@ -2,16 +2,21 @@
 
 Every subcommand lives in its own module of :mod:`hapticrom.commands` (see its docstring for
 the pattern); this module builds the parser from :data:`hapticrom.commands.COMMANDS` and
-applies the one exit-code policy of the project:
+applies the one exit-code policy of the project, the same for every command:
 
 ====  =====================================================================================
-0     success
+0     success (``--help``, ``--version``; a check that finds nothing wrong)
 1     the work failed (a solver or worker failure, an unexpected error)
 2     bad input: any :class:`fieldspec.FieldError` (the message names the field and the
       allowed range), a ``ValueError`` from the library, an unreadable input or unwritable
-      output file; nothing is written
+      output file, a usage error; nothing is written. A check that finds its input broken
+      is bad input too: ``dataset validate`` with problems, ``dataset info`` of a damaged
+      dataset, ``models list`` with a model that fails verification all exit 2.
 130   interrupted (Ctrl-C or SIGTERM); work completed so far is kept where it can be resumed
 ====  =====================================================================================
+
+Progress bars (transients, ``generate``, ``refine``, ``reproduce``) go to stderr with the rate
+and the ETA, only when stderr is a terminal; ``--quiet`` turns them off.
 """
 
 from __future__ import annotations
@@ -25,7 +30,8 @@ from collections.abc import Sequence
 
 from hapticrom.commands import COMMANDS
 
-__all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "build_parser", "main"]
+__all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "build_parser", "main",
+           "version_text"]
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -34,11 +40,27 @@ class _Parser(argparse.ArgumentParser):
     """argparse exits with 2 on usage errors already, which matches the policy."""
 
 
+def version_text() -> str:
+    """``hapticrom X (solver Y)``: the installed package version (its metadata) and
+    :data:`fem.SOLVER_VERSION`, the version recorded with every result."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from fem import SOLVER_VERSION  # cheap: fem loads its modules lazily
+
+    try:
+        package = version("hapticrom")
+    except PackageNotFoundError:  # run from a source tree that is not installed
+        package = "(not installed)"
+    return f"hapticrom {package} (solver {SOLVER_VERSION})"
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The full parser: one sub-parser per module of :data:`COMMANDS`."""
     parser = _Parser(prog="hapticrom",
                      description="Reduced-order surrogate modelling of wearable vibrotactile "
                      "arrays. Exit codes: 0 ok, 1 failed, 2 bad input, 130 interrupted.")
+    parser.add_argument("--version", action="version", version=version_text(),
+                        help="print the package and solver versions and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         module = importlib.import_module(f"hapticrom.commands.{name}")

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+import figstyle
 from planner.optimise import PITCH_TOL_MM, Z95, Plan
 
 __all__ = ["plan_to_dict", "write_plan_plot"]
@@ -76,15 +77,24 @@ def uncertainty(plan: Plan) -> dict[str, Any]:
             "pitch_95_mm": _r(b.pitch_95_mm, 3), "extrapolated": b.extrapolated}
 
 
+_PLOTTED = {
+    "ratio": "left: unit sites (mm) coloured by the leakage ratio (neighbours' amplitude / own "
+             "centre amplitude); right: each candidate's predicted skin amplitude against "
+             "distance from its centre, relative to its own centre amplitude (the unit's "
+             "face), with the criterion",
+    "perceptual": "left: unit sites (mm) coloured by the leakage over the detection threshold; "
+                  "right: each candidate's predicted skin amplitude (um) against distance from "
+                  "its centre at the drive level, with the detection threshold at each "
+                  "frequency",
+}
+
+
 def write_plan_plot(plan: Plan, path: str | Path) -> None:
     """Left: the array (sites coloured by leakage ratio, unit outlines); right: each
     candidate's amplitude against distance from its centre, with the criterion."""
-    import matplotlib
+    from matplotlib.patches import Circle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fig, (ax, bx) = figstyle.figure(1, 2, width_in=11, height_in=5.2)
     best = plan.best
     if best is not None:
         pos = plan.positions_mm
@@ -94,7 +104,7 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
             sc.set_array(plan.loads)
             sc.set_clim(0, 1)
         for x, y in pos:
-            ax.add_patch(plt.Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
+            ax.add_patch(Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
         fig.colorbar(sc, ax=ax, label="leakage / own amplitude" if plan.request.criterion.kind
                      == "ratio" else "leakage / detection threshold")
         ax.set_title(f"{best.name} at {best.frequency_hz:g} Hz: pitch {best.pitch_mm:.2f} mm")
@@ -121,6 +131,9 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
         bx.set_ylabel("amplitude / own center amplitude")
     bx.set_xlabel("distance from unit centre [mm]")
     bx.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    figstyle.annotate(
+        fig, "Array plan", design=("best: " + best.name) if best is not None else
+        "no design meets the criterion",
+        frequency=", ".join(sorted({f"{c.frequency_hz:g} Hz" for c in plan.candidates})),
+        plotted=_PLOTTED["perceptual" if perceptual else "ratio"])
+    figstyle.save(fig, path)

@@ -1,6 +1,8 @@
 """``hapticrom dataset info|validate|merge``: inspect, check and combine datasets.
 
-``validate`` exits 0 for a valid dataset and 2 (bad input) with the list of problems.
+Exit codes (the policy of :mod:`hapticrom.cli`): ``validate`` exits 0 for a valid dataset and
+2 (bad input) with the list of problems; ``info`` exits 2 for a damaged or missing dataset,
+like every command given bad input.
 """
 
 from __future__ import annotations
@@ -38,7 +40,12 @@ def run_info(args: argparse.Namespace) -> int:
     from surrogate.data.inspect import dataset_info
 
     info = dataset_info(args.path)
-    print(json.dumps(info, indent=1) if args.json else format_info(info))
+    if args.json:
+        from hapticrom.documents import dataset_info_document
+
+        print(json.dumps(dataset_info_document(info), indent=1))
+    else:
+        print(format_info(info))
     return 0
 
 

@@ -3,6 +3,7 @@
 Examples::
 
     hapticrom generate --space datasets/spaces/default.toml --n 4096 --out datasets/default
+    (the default space file and the README give the same --n 4096: the shipped dataset)
     hapticrom generate --space S.toml --n 100000 --out D --scheduler tcp://HOST:8786
 """
 
@@ -40,7 +41,8 @@ def register(subparsers: Any) -> None:
                    help="write a part after this many samples (default 256)")
     p.add_argument("--flush-seconds", type=seconds, default=10.0,
                    help="... or after this many seconds (default 10)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", "--no-progress", dest="quiet", action="store_true",
+                   help="no progress bar on stderr (it is shown only on a terminal anyway)")
     p.add_argument("--allow-solver-change", action="store_true",
                    help="extend a dataset computed by another solver version (recorded)")
     p.set_defaults(func=run)
@@ -72,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
             rep = generate(args.space, args.n, args.out, scheduler=args.scheduler,
                            workers=args.workers, chunk=args.chunk,
                            flush_every=args.flush_every, flush_seconds=args.flush_seconds,
-                           progress=not args.no_progress,
+                           progress=not args.quiet,
                            allow_solver_change=args.allow_solver_change,
                            command=shlex.join(sys.argv))
     except KeyboardInterrupt:

@@ -21,7 +21,7 @@ def _list(args: argparse.Namespace) -> int:
     for r in rows:
         print(f"{r['name']:24s} {r.get('kind') or '-':4s} {r.get('created') or '-':26s} "
               f"{r['status'] if r['status'] != 'ok' else r['headline']}")
-    return 0 if all(r["status"] == "ok" for r in rows) else 1
+    return 0 if all(r["status"] == "ok" for r in rows) else 2  # a broken model: bad input
 
 
 def _show(args: argparse.Namespace) -> int:

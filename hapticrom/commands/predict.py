@@ -51,17 +51,19 @@ def _run(args: argparse.Namespace) -> int:
     if args.json:
         check_output_file("--json", args.json)
     p = load_predictor(args.model)
-    out = p.predict(_points(args, p.input_names), extrapolate=args.extrapolate)
+    points = _points(args, p.input_names)
+    out = p.predict(points, extrapolate=args.extrapolate)
     n = len(out["center_amplitude_um"])
     for i in range(n):
         flag = " (extrapolated)" if args.extrapolate and out["extrapolated"][i] else ""
-        print(f"[{i}] center {out['center_amplitude_um'][i]:.4g} um, edge "
+        print(f"[{i}] centre (unit face) magn. {out['center_amplitude_um'][i]:.4g} um, edge magn. "
               f"{out['edge_amplitude_um'][i]:.4g} um at r = {out['edge_radius_mm'][i]:g} mm, "
               f"normalized edge {out['normalized_edge'][i]:.4g} "
               f"(log std {out['center_amplitude_um_log_std'][i]:.2g}){flag}")
     if args.json:
-        doc = {"model": str(args.model), "profile_distance_mm": p.profile_distance_mm.tolist(),
-               **{k: v.tolist() for k, v in out.items()}}
+        from hapticrom.documents import predict_document
+
+        doc = predict_document(args.model, p.card, points, out, p.profile_distance_mm)
         with atomic_path(args.json) as tmp:
             tmp.write_text(json.dumps(doc, indent=1) + "\n")
         print(f"wrote {args.json}")
@@ -77,5 +79,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--csv", metavar="FILE", help="design points, one per row, header = inputs")
     p.add_argument("--extrapolate", action="store_true",
                    help="allow inputs outside the trained range (flagged in the output)")
-    p.add_argument("--json", metavar="OUT", help="write every output as JSON")
+    p.add_argument("--json", metavar="OUT", help="write every output as JSON (schema: "
+                   "docs/output-schema.md)")
     p.set_defaults(func=_run)

@@ -16,6 +16,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--workers", type=int, metavar="N",
                    help="worker processes (default: every core)")
     p.add_argument("--quick", action="store_true", help="a reduced set of cases (for tests)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar on stderr (it is "
+                   "shown only on a terminal anyway)")
     p.set_defaults(func=run)
 
 
@@ -23,5 +25,5 @@ def run(args: argparse.Namespace) -> int:
     """Run the study into ``--out``."""
     from studies.guo2025 import reproduce
 
-    reproduce(args.out, workers=args.workers, quick=args.quick)
+    reproduce(args.out, workers=args.workers, quick=args.quick, progress=not args.quiet)
     return 0

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from hapticrom.outputs import atomic_path, check_output_file
+from hapticrom.progress import progress_bar
 
 _OUTPUTS = ("json", "vtk", "plot")
 
@@ -23,6 +24,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--max-unknowns", type=_unknowns, default=None, metavar="N",
                    help="refuse scenes estimated above N unknowns before solving (default "
                    "1e6, sized for 24 GB; 'inf' to disable)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
 
@@ -49,25 +51,27 @@ def run(args: argparse.Namespace) -> int:
     limit = DEFAULT_MAX_UNKNOWNS if args.max_unknowns is None else args.max_unknowns
     scene = load_scene(args.scene)
     est = check_cost(scene, limit)
-    if est.seconds > 30:  # say so before a long run starts
+    if est.seconds > 30 and not args.quiet:  # say so before a long run starts
         print(f"hapticrom simulate: about {est.unknowns:.3g} unknowns, ~{est.memory_gb:.2g} GB, "
               f"~{est.seconds / 60:.1f} min (estimate)", file=sys.stderr, flush=True)
-    result = simulate(scene, max_unknowns=limit)
-    print(result.summary())
+    name = Path(args.scene).name
+    with progress_bar(scene.analysis.kind == "transient" and not args.quiet,
+                      "time steps", name) as report:
+        result = simulate(scene, max_unknowns=limit, progress=report)
+    print(result.summary(name))
     if args.json:
         with atomic_path(args.json) as tmp:
-            tmp.write_text(json.dumps(result.to_dict(), indent=1) + "\n")
+            tmp.write_text(json.dumps(result.to_dict(name), indent=1) + "\n")
     if args.vtk:
         from fem.results import write_vtk
 
         with atomic_path(args.vtk) as tmp:
             write_vtk(str(tmp), result.domain, result.nodal)
     if args.plot:
-        from fem.results import write_plot
+        from fem.plots import plot_result
 
-        r_mm, U = result.surface_curve()
         with atomic_path(args.plot) as tmp:
-            write_plot(str(tmp), r_mm, U, Path(args.scene).name, result.edge_mm)
+            plot_result(str(tmp), result, name)
     for opt in _OUTPUTS:
         if getattr(args, opt):
             print(f"wrote {getattr(args, opt)}")

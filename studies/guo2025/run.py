@@ -164,12 +164,13 @@ def _transient_summary(res) -> dict:
 
 def run_cases(cases: Mapping[str, Case], workers: int | None, scenes_dir: Path = SCENES_DIR,
               log: Callable[[str], None] = print,
-              follow: FollowUp | None = None) -> dict[str, Solved]:
+              follow: FollowUp | None = None, progress: bool = True) -> dict[str, Solved]:
     """Solve every case once (names that are the same scene share one solve) with
     :func:`surrogate.data.pool.process_map` (``workers`` spawned processes, one BLAS thread
     each); transients (the longest) go first. Once the cases ``follow`` needs are solved,
     ``follow.make`` adds its cases as a second batch. Returns every named case, the follow-up's
-    included. Scripts must call this under ``if __name__ == "__main__":``."""
+    included. ``progress``: a bar with rate and ETA on stderr (when it is a terminal).
+    Scripts must call this under ``if __name__ == "__main__":``."""
     from fem.scene import scene_from_dict, scene_hash
     from surrogate.data.pool import process_map
 
@@ -192,7 +193,8 @@ def run_cases(cases: Mapping[str, Case], workers: int | None, scenes_dir: Path =
         return todo
 
     def solve(todo: Mapping[str, dict], desc: str) -> None:
-        results = process_map(solve_scene, list(todo.values()), workers=workers, desc=desc)
+        results = process_map(solve_scene, list(todo.values()), workers=workers,
+                              desc=desc if progress else None)
         solved.update(zip(todo, results, strict=True))
 
     solve(add(cases), "reproduce")

@@ -77,7 +77,7 @@ def _json_ready(r: Mapping[str, Solved]) -> dict:
 
 def reproduce(out: str | os.PathLike = "reports/reproduce", workers: int | None = None,
               quick: bool = False, scenes_dir: str | os.PathLike = SCENES_DIR,
-              log: Callable[[str], None] = print) -> Reproduction:
+              log: Callable[[str], None] = print, progress: bool = True) -> Reproduction:
     """Run every study and write the report (README.md, PNGs, results.json) into ``out``.
 
     Args:
@@ -86,6 +86,7 @@ def reproduce(out: str | os.PathLike = "reports/reproduce", workers: int | None 
         workers: process-pool size (None = every core).
         quick: the reduced case set of :func:`plan` (for tests).
         scenes_dir: where the ``unit-*.toml`` scenes live (default: the shipped ones).
+        progress: a progress bar (rate, ETA) on stderr when it is a terminal.
 
     Workers are spawned processes: a script calling this needs the usual
     ``if __name__ == "__main__":`` guard (the ``hapticrom`` command has it).
@@ -99,7 +100,7 @@ def reproduce(out: str | os.PathLike = "reports/reproduce", workers: int | None 
     log(f"hapticrom reproduce: {len(p.cases)} cases on {n_workers} worker(s)"
         + (" (quick)" if quick else ""))
     ctx = Context.build(scenes_dir)
-    r = run_cases(p.cases, n_workers, ctx.scenes_dir, log, p.follow)
+    r = run_cases(p.cases, n_workers, ctx.scenes_dir, log, p.follow, progress)
     sections = [study_orientation(r, ctx), study_pogo(r, ctx), study_single(r, ctx),
                 study_triples(r, p.triples, ctx), study_sweeps(r, p.sweeps),
                 study_context(r, ctx)]

@@ -14,7 +14,9 @@ must equal their value), and any of ``center_amplitude_um``, ``edge_amplitude_um
 (a profile CSV, path relative to the table), ``wall_s`` [s] and ``dofs``. Each row needs an
 amplitude or a profile. Lines starting with ``#`` are comments. Unknown columns are an error.
 
-*Profile* (one sample): amplitude versus distance from the unit edge, as exported by ABAQUS
+*Profile* (one sample): a ``hapticrom simulate --json`` result (``.json``, schema version 1
+or the unversioned layout before it; its centre magnitude is taken too), or amplitude versus
+distance from the unit edge, as exported by ABAQUS
 (Report > XY data, ``.rpt`` or ``.csv``) or COMSOL (Export > Plot/Table, ``%`` comment
 header). Delimiters ``,`` ``;`` tab or blanks; non-numeric lines before the data are
 headers, the last one names the columns. Units come from the header (``(mm)``, ``[m]``,
@@ -307,9 +309,14 @@ def ingest_profile(path: str | Path, out: str | Path, values: Mapping[str, Any],
     _unknown(values, space, "values")
     where = str(path)
     vals = _check_values(space, values, where)
-    dist, amp = read_profile_csv(path, distance_unit, amplitude_unit, columns)
-    sid, scene_json = _scene_row(space, vals, where)
     center = None
+    if path.suffix.lower() == ".json":  # a `hapticrom simulate --json` result (old or new)
+        from surrogate.data.simulate_json import read_simulate_json
+
+        dist, amp, center = read_simulate_json(path)
+    else:
+        dist, amp = read_profile_csv(path, distance_unit, amplitude_unit, columns)
+    sid, scene_json = _scene_row(space, vals, where)
     if center_amplitude_um is not None:
         center = _amplitude(str(center_amplitude_um), where, "center_amplitude_um")
     edge = _edge_from_profile(dist, amp)

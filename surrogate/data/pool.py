@@ -93,7 +93,7 @@ def process_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None
 
     ``fn`` must be importable by name (a module-level function). ``workers`` defaults to every
     core; ``workers=1`` runs in this process. With ``desc`` a tqdm progress bar (rate, ETA)
-    goes to stderr. Ctrl-C cancels the queued work and shuts the pool down."""
+    goes to stderr when it is a terminal. Ctrl-C cancels the queued work and shuts the pool down."""
     n_workers = check_workers(workers)
     todo = list(items)
     n = min(n_workers, max(len(todo), 1))
@@ -124,5 +124,7 @@ def process_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None
 def _progress(total: int, desc: str | None) -> Any:
     from tqdm import tqdm
 
-    return tqdm(total=total, desc=desc, unit="run", disable=desc is None, file=sys.stderr,
+    # disable=None: tqdm draws only on a terminal (no bar in logs and pipes)
+    return tqdm(total=total, desc=desc, unit="run", disable=True if desc is None else None,
+                file=sys.stderr,
                 dynamic_ncols=True, smoothing=0.05)

@@ -66,20 +66,25 @@ def _container(tree: dict, defaults: Mapping, tokens: Sequence[PathToken], where
     node: Any = tree
     for depth, tok in enumerate(tokens[:-1]):
         nxt = tokens[depth + 1]
-        empty: Any = [] if isinstance(nxt, int) else {}
-        found, default = lookup(defaults, tokens[: depth + 1])
-        fill = copy.deepcopy(default) if found and isinstance(default, type(empty)) else empty
+
+        def fill(depth: int = depth, nxt: PathToken = nxt) -> Any:
+            # built only when the container is missing: copying the defaults' subtree for every
+            # path written was most of the time of planning a dataset
+            empty: Any = [] if isinstance(nxt, int) else {}
+            found, default = lookup(defaults, tokens[: depth + 1])
+            return copy.deepcopy(default) if found and isinstance(default, type(empty)) else empty
+
         if isinstance(tok, int):
             if not isinstance(node, list):
                 raise TypeError(f"{format_path(tokens[:depth])} is not a list")
             node.extend([None] * (tok + 1 - len(node)))
             if node[tok] is None:
-                node[tok] = fill
+                node[tok] = fill()
         else:
             if not isinstance(node, dict):
                 raise TypeError(f"{format_path(tokens[:depth])} is not a table")
             if tok not in node:
-                node[tok] = fill
+                node[tok] = fill()
         node = node[tok]
         if not isinstance(node, list | dict):
             raise TypeError(f"{format_path(tokens[: depth + 1])} is a value, not a table or "

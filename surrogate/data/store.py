@@ -3,7 +3,8 @@
 Layout::
 
     DIR/_manifest.json          schema version, space, sampling, solver, mesh, runs
-    DIR/_lock                   advisory lock held by the one process writing DIR
+    DIR/_lock                   advisory lock held by the one process writing DIR (deleted
+                                when it finishes, also after a failure)
     DIR/part-000001.parquet     immutable data parts (zstd), written atomically
     DIR/.part-000002.parquet.tmp   a part being written (or left by a killed run)
 
@@ -34,12 +35,10 @@ from __future__ import annotations
 import contextlib
 import copy
 import datetime as _dt
-import errno
-import fcntl
 import json
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +48,7 @@ import pyarrow.parquet as pq
 
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_digest, manifest_problems, part_problems
+from surrogate.data.lockfile import exclusive
 from surrogate.data.space import Space, space_from_dict
 
 __all__ = [
@@ -223,22 +223,10 @@ class Store:
 
     # ---- locking
 
-    @contextlib.contextmanager
-    def lock(self) -> Iterator[None]:
-        """Hold the dataset's advisory write lock (released by the OS even on kill -9)."""
-        fh = open(self.path / LOCK_NAME, "a+")
-        try:
-            try:
-                fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as err:
-                if err.errno in (errno.EAGAIN, errno.EACCES):
-                    raise DatasetError(str(self.path), f"{self.path} is being written by "
-                                       "another process (lock held); wait for it to finish"
-                                       ) from None
-                raise
-            yield
-        finally:
-            fh.close()
+    def lock(self) -> contextlib.AbstractContextManager[None]:
+        """Hold the dataset's advisory write lock (released by the OS even on kill -9; the
+        lock file is deleted on release: :func:`surrogate.data.lockfile.exclusive`)."""
+        return exclusive(self.path / LOCK_NAME, self.path)
 
     # ---- parts
 

@@ -29,19 +29,25 @@ def test_simulate_writes_json_vtk_and_png(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "dofs" in printed and "Fourier modes [1]" in printed
     data = json.loads(out["json"].read_text())
+    assert data["schema_version"] == 1 and data["kind"] == "hapticrom.simulate.harmonic"
+    assert data["scene"]["name"] == "forearm.toml"
+    assert data["analysis"]["frequency_hz"] == pytest.approx(120.0)
     surf = data["surface"]
     n = len(load_scene(EXAMPLE).output.radii_mm)
-    for key in ("ur_um", "ut_um", "uz_um"):
-        assert len(surf[key]["re"]) == len(surf[key]["im"]) == n
+    for c in ("ur", "ut", "uz"):
+        z = np.asarray(surf[f"{c}_complex_um"]["re"]) + 1j * np.asarray(
+            surf[f"{c}_complex_um"]["im"])
+        assert z.size == n
+        assert np.allclose(np.abs(z), surf[f"{c}_amplitude_um"])
     assert len(surf["r_mm"]) == len(surf["magnitude_um"]) == n
-    mag = np.sqrt(sum(np.square(surf[k]["re"]) + np.square(surf[k]["im"])
-                      for k in ("ur_um", "ut_um", "uz_um")))
+    mag = np.sqrt(sum(np.square(surf[f"{c}_amplitude_um"]) for c in ("ur", "ut", "uz")))
     assert np.allclose(mag, surf["magnitude_um"])
     meta = data["meta"]
     assert meta["modes"] == [1] and meta["dofs"] > 0 and meta["elements"] > 0
-    assert meta["time_convention"] == "exp(+i omega t)"
+    assert data["analysis"]["time_convention"] == "exp(+i omega t)"
     assert data["normalized_edge"] == pytest.approx(
-        data["edge_amplitude_um"] / data["center_amplitude_um"])
+        data["edge"]["magnitude_um"] / data["centre"]["magnitude_um"])
+    assert data["edge"]["radius_mm"] == data["definitions"]["edge"]["radius_mm"] > 0
     assert data["profile"]["distance_from_edge_mm"][0] == 0.0
 
     import meshio

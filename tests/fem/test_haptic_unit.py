@@ -105,11 +105,11 @@ def test_paper_prototypes_simulate_from_the_cli(tmp_path, example):
     assert main(["simulate", f"examples/{example}.toml", "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     assert data["normalized_edge"] == pytest.approx(
-        data["edge_amplitude_um"] / data["center_amplitude_um"])
+        data["edge"]["magnitude_um"] / data["centre"]["magnitude_um"])
     prof = data["profile"]
     assert prof["distance_from_edge_mm"][:3] == [0.0, 1.0, 2.0]  # exact, no float noise
-    assert prof["magnitude_um"][0] == pytest.approx(data["edge_amplitude_um"])
-    assert len(prof["uz_um"]) == len(prof["magnitude_um"])
+    assert prof["magnitude_um"][0] == pytest.approx(data["edge"]["magnitude_um"])
+    assert len(prof["uz_amplitude_um"]) == len(prof["magnitude_um"])
 
 
 # --------------------------------------------------------------------------- effects on demand

@@ -21,9 +21,10 @@ def test_predict_prints_and_writes_json(trained_models, tmp_path, capsys):
     path = str(trained_models["nn"][0])
     out = tmp_path / "p.json"
     assert run(["predict", path, *POINT, "--json", str(out)]) == 0
-    assert "center" in capsys.readouterr().out
+    assert "centre (unit face) magn." in capsys.readouterr().out
     doc = json.loads(out.read_text())
-    assert len(doc["profile_um"][0]) == len(doc["profile_distance_mm"])
+    assert doc["schema_version"] == 1 and doc["kind"] == "hapticrom.predict"
+    assert len(doc["outputs"]["profile_magnitude_um"][0]) == len(doc["profile_distance_mm"])
 
 
 def test_predict_bad_input_exit_2_nothing_written(trained_models, tmp_path, capsys):
@@ -44,7 +45,7 @@ def test_predict_csv(trained_models, tmp_path):
     out = tmp_path / "o.json"
     assert run(["predict", str(trained_models["nn"][0]), "--csv", str(csv),
                 "--json", str(out)]) == 0
-    assert len(json.loads(out.read_text())["center_amplitude_um"]) == 2
+    assert len(json.loads(out.read_text())["outputs"]["centre_magnitude_um"]) == 2
 
 
 def test_models_list_and_show(trained_models, tmp_path, capsys):
@@ -58,7 +59,7 @@ def test_models_list_and_show(trained_models, tmp_path, capsys):
     assert run(["models", "show", str(root / "m-gp")]) == 0
     assert json.loads(capsys.readouterr().out)["kind"] == "gp"
     (root / "m-gp" / "model.onnx").write_bytes(b"tampered")
-    assert run(["models", "list", "--root", str(root)]) == 1
+    assert run(["models", "list", "--root", str(root)]) == 2  # broken model: bad input
     assert run(["models", "show", str(root / "m-gp")]) == 2
 
 

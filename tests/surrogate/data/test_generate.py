@@ -127,8 +127,8 @@ def test_process_pool_run_matches_direct_solves_and_extends(tmp_path: Path) -> N
     # each row holds exactly what the solver returns for its scene
     for i in (0, 9):
         direct = simulate(scene_from_dict(planned[i].scene)).to_dict()
-        assert df.loc[i, "center_amplitude_um"] == direct["center_amplitude_um"]
-        assert df.loc[i, "edge_amplitude_um"] == direct["edge_amplitude_um"]
+        assert df.loc[i, "center_amplitude_um"] == direct["centre"]["magnitude_um"]
+        assert df.loc[i, "edge_amplitude_um"] == direct["edge"]["magnitude_um"]
         np.testing.assert_array_equal(df.loc[i, "profile_magnitude_um"],
                                       direct["profile"]["magnitude_um"])
         assert df.loc[i, "dofs"] == direct["meta"]["dofs"]
@@ -379,10 +379,13 @@ def test_transient_rows_store_time_histories(tmp_path: Path) -> None:
     planned, _ = plan_samples(space, 2)
     assert json.loads(df.loc[1, "scene_json"])["analysis"]["voltage_schedule"][0][1] == \
         planned[1].values["drive_voltage_V"]
-    direct = simulate(scene_from_dict(planned[1].scene)).to_dict()["histories"]
-    np.testing.assert_array_equal(df.loc[1, "history_t_s"], direct["t_s"])
+    res = simulate(scene_from_dict(planned[1].scene))
+    direct = res.to_dict()["histories"]
+    np.testing.assert_array_equal(df.loc[1, "history_t_s"], res.histories.t)
     np.testing.assert_array_equal(df.loc[1, "history_r_mm"], [0.0, 5.0])
-    for k, point in enumerate(direct["points"]):
+    probes = [point for point in direct["points"] if point["label"] == "probe"]
+    assert len(probes) == 2
+    for k, point in enumerate(probes):
         np.testing.assert_array_equal(df.loc[1, "history_uz_um"][k], point["uz_um"])
         np.testing.assert_array_equal(df.loc[1, "history_magnitude_um"][k],
                                       point["magnitude_um"])

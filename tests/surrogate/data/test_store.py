@@ -16,7 +16,14 @@ from surrogate.data.errors import DatasetError
 from surrogate.data.inspect import merge_datasets, validate_dataset
 from surrogate.data.provenance import FINGERPRINT_SCENES, same_solver, solver_info
 from surrogate.data.space import space_from_dict
-from surrogate.data.store import FEM_SOURCE, MANIFEST_NAME, Store, arrow_schema, profile_matrix
+from surrogate.data.store import (
+    FEM_SOURCE,
+    LOCK_NAME,
+    MANIFEST_NAME,
+    Store,
+    arrow_schema,
+    profile_matrix,
+)
 
 SPACE = {
     "space": {"name": "store-test", "seed": 1},
@@ -127,6 +134,17 @@ def test_lock_is_exclusive(tmp_path: Path) -> None:
         with pytest.raises(DatasetError, match="another process"), other.lock():
             pass
     with other.lock():  # released
+        pass
+    assert not (tmp_path / "d" / LOCK_NAME).exists()  # no lock file left behind
+
+
+def test_lock_file_is_removed_after_a_failure(tmp_path: Path) -> None:
+    store = _store(tmp_path / "d")
+    with pytest.raises(RuntimeError), store.lock():
+        assert (tmp_path / "d" / LOCK_NAME).exists()
+        raise RuntimeError("boom")
+    assert not (tmp_path / "d" / LOCK_NAME).exists()
+    with store.lock():  # and it can be taken again
         pass
 
 
