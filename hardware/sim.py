@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+import figstyle
 from hardware.device import Device
 from hardware.protocol import Segment, Status
 from hardware.safety import ExposureMeter, SafetyLimits
@@ -179,24 +180,29 @@ def _write_figures(out: Path, freq: float, t: NDArray, e: NDArray, sites: NDArra
         ax.set_ylabel("y [mm]")
         return im
 
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.6))
+    fig, (ax, bx) = figstyle.figure(1, 2, width_in=11, height_in=5.4)
     im = draw_map(ax, k)
     fig.colorbar(im, ax=ax, label="skin amplitude [um]")
-    ax.set_title(f"peak at t = {t[k]:.0f} ms ({freq:g} Hz, incoherent sum)")
+    ax.set_title(f"skin amplitude at t = {t[k]:.0f} ms (the pattern's peak)")
     for i in range(len(sites)):
         bx.plot(t, sites[i], lw=0.8)
     bx.axvline(t[k], color="k", ls="--", lw=0.8)
     bx.set_xlabel("time [ms]")
     bx.set_ylabel("amplitude at each site [um]")
     bx.set_title("site amplitudes (own unit and crosstalk)")
-    fig.tight_layout()
+    figstyle.annotate(
+        fig, "Simulated array playing a pattern", design=f"{len(pos)} units, the plan's design",
+        frequency=f"{freq:g} Hz",
+        plotted="left: skin displacement amplitude (um) over the array at the moment of the "
+        "largest site amplitude, units' outlines in grey, neighbours added in power "
+        "(independent ERMs); right: the amplitude at every site against time (its own unit "
+        "plus crosstalk), with the left panel's moment dashed")
     png = out / "field-peak.png"
-    fig.savefig(png, dpi=110)
-    plt.close(fig)
+    figstyle.save(fig, png)
 
     # the animation: no axes or colour bar (drawing ticks dominates the cost of a frame); the
     # scale is in the title, the axes are the PNG's
-    fig, ax = plt.subplots(figsize=(4.2, 4.2))
+    fig, ax = figstyle.figure(width_in=4.2, height_in=4.2)
     im = draw_map(ax, 0)
     ax.set_axis_off()
     fig.subplots_adjust(0.02, 0.02, 0.98, 0.9)
