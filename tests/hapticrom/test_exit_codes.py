@@ -42,6 +42,10 @@ def test_help_is_0_and_a_missing_command_is_2(capsys):
     ["predict", "models/nn-default", "--set", "no_such_input=1"],
     ["models", "show", "{tmp}/none"],
     ["plan", "missing.toml"],
+    ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "log",
+     "--out", "{tmp}/play"],
+    ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "nonsense"],
+    ["bench", "accuracy", "--quick", "--out", "{tmp}/no/such/dir/report.txt"],
 ])
 def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
     rc = main([a.replace("{tmp}", str(tmp_path)) for a in argv])
@@ -52,7 +56,7 @@ def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
 
 def test_every_command_has_a_bad_input_case_above():
     covered = {"simulate", "reproduce", "generate", "dataset", "ingest", "train", "refine",
-               "predict", "models", "plan"}
+               "predict", "models", "plan", "play", "bench"}
     assert covered == set(COMMANDS)
 
 
