@@ -1,6 +1,7 @@
 """surrogate.data.pool.process_map: ordered results in and out of process, one BLAS thread per
 worker, errors surface, bad worker counts are refused."""
 
+import io
 import os
 
 import pytest
@@ -48,10 +49,22 @@ def test_the_first_error_is_raised(workers):
         process_map(_fail_on_three, range(6), workers=workers)
 
 
-def test_progress_goes_to_stderr(capsys):
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_goes_to_a_terminal_on_stderr(monkeypatch, capsys):
+    term = _Terminal()
+    monkeypatch.setattr("sys.stderr", term)
     assert process_map(_square, [1, 2], workers=1, desc="squares") == [1, 4]
-    captured = capsys.readouterr()
-    assert "squares" in captured.err and captured.out == ""
+    assert "squares" in term.getvalue() and "2/2" in term.getvalue()
+    assert capsys.readouterr().out == ""
+
+
+def test_no_progress_bar_in_logs_and_pipes(capsys):
+    assert process_map(_square, [1, 2], workers=1, desc="squares") == [1, 4]
+    assert capsys.readouterr() == ("", "")
 
 
 @pytest.mark.parametrize("workers", [0, -1, 257, 1.5, True])
