@@ -9,7 +9,7 @@ PIP := $(BIN)/pip install --quiet -c constraints.txt
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
-	$(PIP) -e ".[dev]"
+	$(PIP) -e ".[dev,bench]"
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -44,6 +44,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_fem.py
 	$(BIN)/python bench/bench_effects.py
 	$(BIN)/python bench/bench_absorber.py
+	$(BIN)/python bench/bench_solver.py
 	$(BIN)/python bench/bench_generate.py
 	$(BIN)/python bench/bench_surrogate.py
 	$(BIN)/python bench/bench_plan.py

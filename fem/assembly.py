@@ -9,7 +9,7 @@ transformation product T^T K T is ever formed.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -43,6 +43,8 @@ class DofMap:
     prescribed: NDArray
     element_dofs: NDArray
     n_free: int
+    # ScatterMaps by element-dof array (see scatter_map); a `replace` starts an empty cache.
+    _scatter: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_full(self) -> int:
@@ -134,12 +136,98 @@ def build_dofmap(mesh: Mesh, mode: int,
                   int(primary.sum()))
 
 
+@dataclass(frozen=True)
+class ScatterMap:
+    """Where every kept element-matrix entry lands in the CSR data of the reduced matrix.
+
+    Built once per (dofmap, element-dof array) by one stable sort of the (row, col) keys, so
+    assembling values is a gather and one segmented sum (``np.add.reduceat``) straight into the
+    CSR data: no COO -> CSR conversion and no duplicate summing per assembly. Entries are summed
+    in element order, as COO -> CSR does, so the result equals it to round-off.
+
+    Attributes:
+        gather: (m,) flat indices into Ke.reshape(-1) of the kept entries, sorted by (row, col).
+        scale: (m,) product of the two dof coefficients of each gathered entry, or None when all
+            are +1.
+        starts: (nnz,) first gathered entry of each CSR entry.
+        indptr, indices: CSR structure of the reduced matrix (sorted column indices).
+        shape: (ne, nd, nd) element-matrix shape the map was built for.
+    """
+
+    gather: NDArray
+    scale: NDArray | None
+    starts: NDArray
+    indptr: NDArray
+    indices: NDArray
+    shape: tuple[int, int, int]
+
+    def assemble(self, Ke: NDArray, n: int) -> sp.csr_matrix:
+        """The reduced (n, n) CSR matrix of element matrices ``Ke`` of shape ``self.shape``."""
+        vals = np.ascontiguousarray(Ke).reshape(-1)[self.gather]
+        if self.scale is not None:
+            vals *= self.scale
+        data = np.add.reduceat(vals, self.starts) if vals.size else vals
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
+
+
+def build_scatter_map(dm: DofMap, edofs: NDArray) -> ScatterMap:
+    """Scatter map of element matrices on the full dofs ``edofs`` (ne, nd) into ``dm``'s
+    reduced system (entries on fixed dofs dropped, tied dofs merged with their coefficient)."""
+    rows = dm.master[edofs]
+    ne, nd = rows.shape
+    shape3 = (ne, nd, nd)
+    R = np.broadcast_to(rows[:, :, None], shape3).reshape(-1)
+    C = np.broadcast_to(rows[:, None, :], shape3).reshape(-1)
+    kept = np.flatnonzero((R >= 0) & (C >= 0))
+    n = dm.n_free
+    key = R[kept].astype(np.int64) * n + C[kept]
+    order = np.argsort(key, kind="stable")  # stable: duplicates keep element order
+    gather = kept[order]
+    key = key[order]
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if key.size else key[:0]
+    unique = key[starts]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(unique // n, minlength=n), out=indptr[1:])
+    index_dtype = np.int32 if max(n, unique.size) < 2**31 - 1 else np.int64
+    coefs = dm.coef[edofs]
+    scale = None
+    if np.any(coefs != 1.0):
+        scale = (coefs[:, :, None] * coefs[:, None, :]).reshape(-1)[gather]
+    return ScatterMap(gather, scale, starts, indptr.astype(index_dtype),
+                      (unique % n).astype(index_dtype), shape3)
+
+
+def scatter_map(dm: DofMap, element_dofs: NDArray | None = None) -> ScatterMap:
+    """The cached :class:`ScatterMap` of ``element_dofs`` (default: the mesh elements) on
+    ``dm``; built on first use, so every later assembly on the same map (stiffness, mass and
+    damping of a transient, repeated solves) reuses it."""
+    edofs = dm.element_dofs if element_dofs is None else element_dofs
+    hit = dm._scatter.get(id(edofs))
+    if hit is not None and hit[0] is edofs:  # the stored array pins the id: no reuse by another
+        return hit[1]
+    smap = build_scatter_map(dm, edofs)
+    dm._scatter[id(edofs)] = (edofs, smap)
+    return smap
+
+
 def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
                     ) -> sp.csr_matrix:
-    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix.
+    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix (CSR, sorted
+    indices, duplicates summed) through the dofmap's cached :func:`scatter_map`.
 
     ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
     pass their own full dof indices."""
+    smap = scatter_map(dm, element_dofs)
+    if Ke.shape != smap.shape:
+        raise ValueError(f"element matrices of shape {Ke.shape} do not match the element dofs "
+                         f"{smap.shape[:2]}: expected {smap.shape}")
+    return smap.assemble(Ke, dm.n_free)
+
+
+def assemble_matrix_coo(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
+                        ) -> sp.csr_matrix:
+    """Reference assembly through COO -> CSR (duplicate summing per call); the scatter map of
+    :func:`assemble_matrix` must agree with it to round-off."""
     edofs = dm.element_dofs if element_dofs is None else element_dofs
     rows = dm.master[edofs]
     coefs = dm.coef[edofs]
