@@ -18,9 +18,10 @@ training scenes (fem defaults, unbalance 0.006 g mm) spinning at the drive frequ
 force grows with the frequency squared; drive_level scales them linearly (another unbalance,
 or a linear actuator at that frequency).
 
-Only identical units on a regular grid are planned: mixed designs or positions would need a
-search over assignments (the leakage then differs per site), and "any design within the
-model's range" a continuous inner optimisation over the inputs; neither is offered yet.
+Free positions (``grid = "free"``): no pitch is chosen; every design and frequency is
+evaluated at the given sites and the feasible one with the smallest worst load (the largest
+margin) wins; its ``pitch_mm`` is the sites' nearest-neighbour distance. Mixed designs in one
+array are not planned (the search would be over assignments).
 """
 
 from __future__ import annotations
@@ -37,8 +38,8 @@ from planner.timing import plan_timing
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
 
-__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "loads", "plan_layout", "smallest_pitch",
-           "worst_load"]
+__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "array_positions", "loads", "plan_layout",
+           "smallest_pitch", "worst_load"]
 
 PITCH_TOL_MM = 0.01
 Z95 = 1.959964
@@ -62,6 +63,7 @@ class DesignResult:
     bound: UnitField | None = None  # the 95 % bound field (neighbours high, own low)
     felt: bool = True  # perceptual: own amplitude above the detection threshold
     edge_um: float | None = None  # the surrogate's edge amplitude [um]
+    load: float | None = None  # worst site load at pitch_mm (free positions: at the sites)
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -101,9 +103,24 @@ class Plan:
         return self.ratios * np.diag(C) * self.request.criterion.drive_level
 
 
+def array_positions(req: LayoutRequest, pitch_mm: float) -> np.ndarray:
+    """(n, 2) site centres [mm]: the grid at ``pitch_mm``, or the given free positions (the
+    pitch then plays no part)."""
+    if req.positions_mm is not None:
+        return np.array(req.positions_mm, dtype=float)
+    return site_positions(req.rows, req.cols, pitch_mm, req.grid)
+
+
+def nearest_distance_mm(positions: np.ndarray) -> float:
+    """Smallest centre-to-centre distance of the sites [mm] (inf for one site)."""
+    r = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=2)
+    np.fill_diagonal(r, np.inf)
+    return float(r.min())
+
+
 def worst_ratio(f: UnitField, req: LayoutRequest, pitch_mm: float) -> float:
     """Largest leakage / own amplitude over the sites at ``pitch_mm``."""
-    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    pos = array_positions(req, pitch_mm)
     if len(pos) < 2:
         return 0.0
     return float(leakage_ratio(crosstalk_matrix(f, pos), req.criterion.superposition).max())
@@ -121,7 +138,7 @@ def loads(C: np.ndarray, req: LayoutRequest, frequency_hz: float) -> np.ndarray:
 
 def worst_load(f: UnitField, req: LayoutRequest, pitch_mm: float, frequency_hz: float) -> float:
     """Largest site load of the array at ``pitch_mm`` (0 for a single site)."""
-    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    pos = array_positions(req, pitch_mm)
     if len(pos) < 2:
         return 0.0
     return float(loads(crosstalk_matrix(f, pos), req, frequency_hz).max())
@@ -129,7 +146,13 @@ def worst_load(f: UnitField, req: LayoutRequest, pitch_mm: float, frequency_hz: 
 
 def smallest_pitch(f: UnitField, req: LayoutRequest, frequency_hz: float = 0.0) -> float | None:
     """Smallest pitch in the request's bounds (and >= 2 edge radii) meeting the criterion
-    (``frequency_hz`` sets the threshold of the perceptual one)."""
+    (``frequency_hz`` sets the threshold of the perceptual one). Free positions: their
+    nearest-neighbour distance when the units do not overlap there and every load is <= 1,
+    else None."""
+    if req.positions_mm is not None:
+        near = nearest_distance_mm(array_positions(req, 0.0))
+        fits = near >= 2 * f.edge_radius_mm and worst_load(f, req, near, frequency_hz) <= 1.0
+        return near if fits else None
     lo = max(req.min_pitch_mm, 2 * f.edge_radius_mm)
     hi = req.max_pitch_mm
     if lo > hi or worst_load(f, req, hi, frequency_hz) > 1.0:
@@ -174,9 +197,26 @@ def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[st
     return predictor, combos, out
 
 
+def _check_overlap(req: LayoutRequest, results: list[DesignResult]) -> None:
+    """Free positions: refuse sites closer than every candidate unit's diameter (naming the
+    later site of the closest pair); a candidate that overlaps while another fits is only
+    infeasible."""
+    pos = array_positions(req, 0.0)
+    smallest = min(2 * r.edge_radius_mm for r in results)
+    r = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2)
+    np.fill_diagonal(r, np.inf)
+    if r.min() >= smallest:
+        return
+    i, j = sorted(np.unravel_index(int(np.argmin(r)), r.shape))
+    raise LayoutError(f"array.positions_mm[{j}]", f"array.positions_mm[{j}] is {r[i, j]:.3g} "
+                      f"mm from array.positions_mm[{i}]: units overlap (the smallest candidate "
+                      f"unit is {smallest:.3g} mm across); sites must be at least that apart")
+
+
 def plan_layout(req: LayoutRequest) -> Plan:
     """Evaluate every design at every drive frequency, pick the smallest feasible pitch
-    (ties: the larger own amplitude)."""
+    (ties: the larger own amplitude); with free positions, the feasible design with the
+    smallest worst load (the largest margin) at the given sites."""
     predictor, combos, out = _predict(req)
     grid = predictor.profile_distance_mm
     results = []
@@ -195,12 +235,19 @@ def plan_layout(req: LayoutRequest) -> Plan:
             smallest_pitch(nominal, req, freq) if felt else None,
             smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
             float(out["edge_amplitude_um"][k])))
+    for r in results:
+        if r.pitch_mm is not None:
+            r.load = worst_load(r.unit, req, r.pitch_mm, r.frequency_hz)
     feasible = [r for r in results if r.pitch_mm is not None]
-    best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
+    if req.positions_mm is not None:
+        _check_overlap(req, results)
+        best = min(feasible, key=lambda r: (r.load, -r.center_um)) if feasible else None
+    else:
+        best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
     result = Plan(req, results, best)
     if best is not None:
         f = best.unit
-        result.positions_mm = site_positions(req.rows, req.cols, best.pitch_mm, req.grid)
+        result.positions_mm = array_positions(req, best.pitch_mm)
         result.crosstalk_um = crosstalk_matrix(f, result.positions_mm)
         result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
         result.loads = loads(result.crosstalk_um, req, best.frequency_hz)

@@ -35,10 +35,14 @@ def _run(args: argparse.Namespace) -> int:
     limit = (f"leakage <= {crit.max_ratio:g} of own amplitude" if crit.kind == "ratio" else
              f"leakage below the detection threshold ({crit.threshold.source}), drive level "
              f"{crit.drive_level:g}")
-    print(f"{req.rows} x {req.cols} {req.grid} array, {limit} ({crit.superposition}), model "
+    shape = (f"{req.cols} free sites" if req.grid == "free" else
+             f"{req.rows} x {req.cols} {req.grid} array")
+    print(f"{shape}, {limit} ({crit.superposition}), model "
           f"{req.model}")
     for c in plan.candidates:
         pitch = "infeasible" if c.pitch_mm is None else (
+            f"nearest sites {c.pitch_mm:6.2f} mm, worst load {c.load:.3f} (margin "
+            f"{1 / c.load if c.load else float('inf'):.3f})" if req.grid == "free" else
             f"pitch {c.pitch_mm:6.2f} mm (edge to edge {c.edge_to_edge_mm:5.2f} mm; with the "
             f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
         flag = (" [extrapolated]" if c.extrapolated else "") + (
