@@ -40,6 +40,12 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     orientation = "reverse"
     ...
 
+    [[design]]                      # or: designs drawn from the model's trained range
+    name = "any"
+    any = true                      # inputs given here stay fixed, the others are drawn
+    n_candidates = 64               # [8, 1024] (planner.candidates)
+    seed = 0
+
 Every value is checked here for its type and range; the design inputs are checked against
 the model's own inputs (names, units, trained ranges) when the plan is made.
 """
@@ -51,7 +57,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fieldspec import Context, FieldError, Spec, read_array, read_table, read_value, require_table
+from fieldspec import (
+    Context,
+    FieldError,
+    Spec,
+    read_array,
+    read_fields,
+    read_table,
+    read_value,
+    require_table,
+)
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
@@ -169,12 +184,26 @@ def _inputs(raw: Any, path: str, ctx: Context) -> dict[str, Any]:
     return dict(table)
 
 
+# any = true: candidates drawn from the model's trained range (planner.candidates)
+_ANY = {"any": Spec(bool, False),
+        "n_candidates": Spec(int, 64, "[8, 1024]"),
+        "seed": Spec(int, 0, "[0, 4294967295]")}
+
+
 def _design(raw: Any, path: str, i: int, ctx: Context) -> dict[str, Any]:
-    d = _inputs(raw, path, ctx)
+    table = dict(raw) if isinstance(raw, dict) else raw
+    sampling = {k: table.pop(k) for k in _ANY if isinstance(table, dict) and k in table}
+    opts = read_fields(sampling, _ANY, path, ctx)
+    if not opts["any"]:
+        extra = [k for k in ("n_candidates", "seed") if k in sampling]
+        if extra:
+            raise LayoutError(f"{path}.{extra[0]}", f"{path}.{extra[0]}: only with "
+                              f"{path}.any = true")
+    d = _inputs(table, path, ctx)
     name = d.pop("name", f"design{i}")
     if not isinstance(name, str) or not name:
         raise LayoutError(f"{path}.name", f"{path}.name = {name!r}: expected a non-empty text")
-    return {"name": name, "inputs": d}
+    return {"name": name, "inputs": d, **opts}
 
 
 def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.candidates import expand_any
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
 from planner.layout import LayoutError, LayoutRequest
 from planner.timing import plan_timing
@@ -64,6 +65,7 @@ class DesignResult:
     felt: bool = True  # perceptual: own amplitude above the detection threshold
     edge_um: float | None = None  # the surrogate's edge amplitude [um]
     load: float | None = None  # worst site load at pitch_mm (free positions: at the sites)
+    family: str = ""  # the request's design table (an any = true table: its name)
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -85,6 +87,17 @@ class Plan:
     loads: np.ndarray = field(default_factory=lambda: np.zeros(0))
     load_95: float | None = None  # worst load at the chosen pitch with the 95 % bound field
     timing: dict[str, Any] | None = None  # planner.timing.plan_timing of the chosen unit
+
+    def shown(self) -> list[DesignResult]:
+        """The candidates worth listing: every named design, and of each ``any = true`` table
+        only its best (the chosen one's key) or, with none feasible, its first."""
+        named = [c for c in self.candidates if c.family == c.name]
+        best: dict[str, DesignResult] = {}
+        for c in self.candidates:
+            if c.family != c.name and (c.family not in best or _better(
+                    c, best[c.family], self.request.positions_mm is not None)):
+                best[c.family] = c
+        return named + list(best.values())
 
     @property
     def margin(self) -> float | None:
@@ -172,15 +185,35 @@ def is_felt(center_um: float, req: LayoutRequest, frequency_hz: float) -> bool:
         center_um * crit.drive_level >= float(crit.threshold(frequency_hz))
 
 
+def _designs(req: LayoutRequest, predictor: Any) -> list[tuple[int, dict[str, Any]]]:
+    """(index in the request, design) for every candidate: named designs as given, each
+    ``any = true`` table expanded (:func:`planner.candidates.expand_any`)."""
+    fixed = {*req.site, "frequency_hz"}
+    out: list[tuple[int, dict[str, Any]]] = []
+    for i, d in enumerate(req.designs):
+        if not d.get("any"):
+            out.append((i, d))
+            continue
+        unknown = [k for k in d["inputs"] if k not in predictor.input_names]
+        if unknown:
+            raise LayoutError(f"design[{i}].{unknown[0]}", f"design[{i}].{unknown[0]}: not an "
+                              f"input of {req.model} (inputs: {', '.join(predictor.input_names)})")
+        try:
+            out += [(i, x) for x in expand_any(d, predictor.specs, fixed, f"design[{i}]")]
+        except ValueError as err:
+            raise LayoutError(f"design[{i}].n_candidates", str(err)) from None
+    return out
+
+
 def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[str, Any]]:
     predictor = load_predictor(req.model)
-    combos = list(itertools.product(req.designs, req.frequencies_hz))
-    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for d, f in combos]
+    combos = list(itertools.product(_designs(req, predictor), req.frequencies_hz))
+    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for (_, d), f in combos]
     names = predictor.input_names
     for i, row in enumerate(rows):
         missing = [n for n in names if n not in row]
         unknown = [k for k in row if k not in names]
-        where = f"design[{req.designs.index(combos[i][0])}]"
+        where = f"design[{combos[i][0][0]}]"
         if unknown:
             raise LayoutError(f"{where}.{unknown[0]}", f"{where}.{unknown[0]}: not an input of "
                               f"{req.model} (inputs: {', '.join(names)})")
@@ -194,7 +227,20 @@ def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[st
         raise LayoutError(f"design.{err.field}", f"design or site input {err}; set "
                           "model.allow_extrapolation = true to plan outside the trained "
                           "range (flagged in the plan)") from None
-    return predictor, combos, out
+    return predictor, [(d, f) for (_, d), f in combos], out
+
+
+def _key(r: DesignResult, free: bool) -> tuple[float, float]:
+    """Sort key of a feasible candidate: smallest pitch (free positions: smallest worst
+    load), then the larger own amplitude."""
+    return ((r.load if free else r.pitch_mm), -r.center_um)  # type: ignore[return-value]
+
+
+def _better(a: DesignResult, b: DesignResult, free: bool) -> bool:
+    """Whether ``a`` beats ``b`` (a feasible candidate beats an infeasible one)."""
+    if a.pitch_mm is None or b.pitch_mm is None:
+        return a.pitch_mm is not None and b.pitch_mm is None
+    return _key(a, free) < _key(b, free)
 
 
 def _check_overlap(req: LayoutRequest, results: list[DesignResult]) -> None:
@@ -234,16 +280,15 @@ def plan_layout(req: LayoutRequest) -> Plan:
             bool(out["extrapolated"][k]) if "extrapolated" in out else False,
             smallest_pitch(nominal, req, freq) if felt else None,
             smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
-            float(out["edge_amplitude_um"][k])))
+            float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"])))
     for r in results:
         if r.pitch_mm is not None:
             r.load = worst_load(r.unit, req, r.pitch_mm, r.frequency_hz)
     feasible = [r for r in results if r.pitch_mm is not None]
-    if req.positions_mm is not None:
+    free = req.positions_mm is not None
+    if free:
         _check_overlap(req, results)
-        best = min(feasible, key=lambda r: (r.load, -r.center_um)) if feasible else None
-    else:
-        best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
+    best = min(feasible, key=lambda r: _key(r, free)) if feasible else None
     result = Plan(req, results, best)
     if best is not None:
         f = best.unit

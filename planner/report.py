@@ -48,6 +48,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "criterion": criterion,
         "site": req.site, "candidates": cands,
         "best": None if best is None else best.name,
+        "best_inputs": None if best is None else best.inputs,
         "best_frequency_hz": None if best is None else best.frequency_hz,
         "pitch_mm": None if best is None else _r(best.pitch_mm, 3),
         "margin": _r(plan.margin),
@@ -118,7 +119,7 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
     ax.set_ylabel("y [mm]")
     crit = plan.request.criterion
     perceptual = crit.kind == "perceptual"
-    for c in plan.candidates:
+    for c in plan.shown():
         f = c.unit
         r = np.linspace(f.edge_radius_mm, plan.request.max_pitch_mm, 300)
         y = f.amplitude(r) * crit.drive_level if perceptual else f.amplitude(r) / f.center_um

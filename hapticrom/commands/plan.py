@@ -39,7 +39,12 @@ def _run(args: argparse.Namespace) -> int:
              f"{req.rows} x {req.cols} {req.grid} array")
     print(f"{shape}, {limit} ({crit.superposition}), model "
           f"{req.model}")
-    for c in plan.candidates:
+    for family in sorted({c.family for c in plan.candidates if c.family != c.name}):
+        drawn = [c for c in plan.candidates if c.family == family]
+        n_ok = sum(c.pitch_mm is not None for c in drawn)
+        print(f"  {family}: {len(drawn)} candidates drawn from the model's range (designs x "
+              f"frequencies), {n_ok} feasible; its best is listed")
+    for c in plan.shown():
         pitch = "infeasible" if c.pitch_mm is None else (
             f"nearest sites {c.pitch_mm:6.2f} mm, worst load {c.load:.3f} (margin "
             f"{1 / c.load if c.load else float('inf'):.3f})" if req.grid == "free" else
@@ -54,6 +59,9 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(f"best: {plan.best.name} at {plan.best.frequency_hz:g} Hz, pitch "
               f"{plan.best.pitch_mm:.2f} mm, margin {plan.margin:.3f}")
+        if plan.best.family != plan.best.name:
+            print("  inputs: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else
+                                           f"{k} = {v}" for k, v in plan.best.inputs.items()))
         _print_uncertainty(plan)
         _print_timing(plan.timing)
     if verify is not None:
