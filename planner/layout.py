@@ -9,6 +9,8 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     cols = 4                        # sites per row
     grid = "square"                 # "square" | "hex" (rows offset by half a pitch) | "free"
     # positions_mm = [[0, 0], [18, 0], ...]  # grid = "free" only (no rows/cols): 2-256 sites
+    # objective = "max_sites"       # instead of rows/cols: the most sites that fit in
+    # region_mm = [60, 120]         #   the region [width, height] [mm] (planner.region)
     min_pitch_mm = 5.0              # centre-to-centre pitch searched in [min, max] [mm]
     max_pitch_mm = 60.0
 
@@ -74,6 +76,7 @@ __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layou
 
 GRIDS = ("square", "hex", "free")
 SUPERPOSITIONS = ("incoherent", "worst")
+OBJECTIVES = ("min_pitch", "max_sites")
 KINDS = ("ratio", "perceptual")
 MAX_SITES_PER_SIDE = 32
 FREE_SITES = (2, 256)  # grid = "free": number of given positions
@@ -126,6 +129,8 @@ class LayoutRequest:
     allow_extrapolation: bool = False
     timing: TimingSpec = TimingSpec()
     positions_mm: tuple[tuple[float, float], ...] | None = None  # grid = "free" only
+    objective: str = "min_pitch"  # "max_sites": rows x cols chosen to fill region_mm
+    region_mm: tuple[float, float] | None = None  # (width, height) [mm], max_sites only
 
 
 _MODEL = {"path": Spec(str, "models/nn-default"),
@@ -153,6 +158,8 @@ _ARRAY = {"grid": Spec(str, "square", choices=GRIDS),
           "rows": Spec(int, None, f"[1, {MAX_SITES_PER_SIDE}]"),
           "cols": Spec(int, None, f"[1, {MAX_SITES_PER_SIDE}]"),
           "positions_mm": Spec(object, None, reader=_read_positions),
+          "objective": Spec(str, "min_pitch", choices=OBJECTIVES),
+          "region_mm": Spec(tuple, None, f"(0, {POSITION_LIMIT_MM:g}]"),
           "min_pitch_mm": Spec(float, 2.0, "(0, 500]"),
           "max_pitch_mm": Spec(float, 100.0, "[array.min_pitch_mm, 1000]")}
 _DRIVE = {"frequencies_hz": Spec(tuple, (120.0,), "(0, 1e4]")}
@@ -246,6 +253,24 @@ def _sites(array: dict[str, Any]) -> tuple[int, int, tuple | None]:
     """(rows, cols, positions): a grid needs rows and cols, free positions exclude them (a
     free layout is one row of its sites)."""
     given = [k for k in ("rows", "cols") if array[k] is not None]
+    region = array["region_mm"]
+    if region is not None and len(region) != 2:
+        raise LayoutError("array.region_mm", f"array.region_mm = {list(region)}: expected "
+                          "[width, height] [mm]")
+    if array["objective"] == "max_sites":
+        if region is None:
+            raise LayoutError("array.region_mm", 'array.region_mm is missing: objective = '
+                              '"max_sites" needs the region [width, height] [mm]')
+        if array["grid"] == "free":
+            raise LayoutError("array.objective", 'array.objective = "max_sites" needs grid = '
+                              '"square" or "hex"')
+        if given:
+            raise LayoutError(f"array.{given[0]}", f"array.{given[0]}: not with objective = "
+                              '"max_sites" (the plan chooses rows and cols)')
+        return 1, 1, None
+    if region is not None:
+        raise LayoutError("array.region_mm", 'array.region_mm: only with objective = '
+                          '"max_sites"')
     if array["grid"] == "free":
         if array["positions_mm"] is None:
             raise LayoutError("array.positions_mm", 'array.positions_mm is missing: grid = '
@@ -297,7 +322,8 @@ def layout_from_dict(d: Any) -> LayoutRequest:
                          tuple(drive["frequencies_hz"]),
                          _criterion(criterion, tuple(drive["frequencies_hz"])),
                          tuple(designs), model["allow_extrapolation"], TimingSpec(**timing),
-                         positions)
+                         positions, array["objective"],
+                         None if array["region_mm"] is None else tuple(array["region_mm"]))
 
 
 def load_layout(path: str | Path) -> LayoutRequest:

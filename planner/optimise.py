@@ -27,14 +27,16 @@ array are not planned (the search would be over assignments).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from planner.candidates import expand_any
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
-from planner.layout import LayoutError, LayoutRequest
+from planner.layout import MAX_SITES_PER_SIDE, LayoutError, LayoutRequest
+from planner.region import largest_array, largest_pitch
 from planner.timing import plan_timing
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
@@ -66,6 +68,7 @@ class DesignResult:
     edge_um: float | None = None  # the surrogate's edge amplitude [um]
     load: float | None = None  # worst site load at pitch_mm (free positions: at the sites)
     family: str = ""  # the request's design table (an any = true table: its name)
+    shape: tuple[int, int] | None = None  # max_sites: the (rows, cols) that fit the region
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -230,10 +233,37 @@ def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[st
     return predictor, [(d, f) for (_, d), f in combos], out
 
 
-def _key(r: DesignResult, free: bool) -> tuple[float, float]:
-    """Sort key of a feasible candidate: smallest pitch (free positions: smallest worst
-    load), then the larger own amplitude."""
-    return ((r.load if free else r.pitch_mm), -r.center_um)  # type: ignore[return-value]
+def _key(r: DesignResult, free: bool) -> tuple[float, ...]:
+    """Sort key of a feasible candidate: the most sites (max_sites), then the smallest
+    pitch (free positions: smallest worst load), then the larger own amplitude."""
+    sites = -r.shape[0] * r.shape[1] if r.shape is not None else 0
+    return (sites, (r.load if free else r.pitch_mm), -r.center_um)  # type: ignore[return-value]
+
+
+def _shaped(req: LayoutRequest, r: DesignResult) -> LayoutRequest:
+    """The request with the candidate's grid shape (max_sites), else as it is."""
+    return req if r.shape is None else replace(req, rows=r.shape[0], cols=r.shape[1])
+
+
+def _fill_region(f: UnitField, req: LayoutRequest, frequency_hz: float) -> LayoutRequest | None:
+    """max_sites: the request with the most rows x cols that meet the criterion inside
+    ``region_mm`` (None: not even one unit fits); other objectives: the request."""
+    if req.objective != "max_sites":
+        return req
+
+    def top(rows: int, cols: int) -> float:
+        return min(largest_pitch(rows, cols, req.grid, req.region_mm, f.edge_radius_mm),
+                   req.max_pitch_mm)
+
+    def fits(rows: int, cols: int) -> bool:
+        p = top(rows, cols)
+        if p < max(req.min_pitch_mm, 2 * f.edge_radius_mm):
+            return rows * cols == 1 and p > -math.inf
+        shaped = replace(req, rows=rows, cols=cols)
+        return worst_load(f, shaped, p, frequency_hz) <= 1.0
+
+    shape = largest_array(fits, MAX_SITES_PER_SIDE)
+    return None if shape is None else replace(req, rows=shape[0], cols=shape[1])
 
 
 def _better(a: DesignResult, b: DesignResult, free: bool) -> bool:
@@ -274,21 +304,28 @@ def plan_layout(req: LayoutRequest) -> Plan:
         bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
                           profile * np.exp(Z95 * s_p))
         felt = is_felt(float(center), req, float(freq))
+        shaped = _fill_region(nominal, req, float(freq)) if felt else req
         results.append(DesignResult(
             design["name"], float(freq), dict(design["inputs"]), float(center), edge,
             float(s_c), float(s_p.max()),
             bool(out["extrapolated"][k]) if "extrapolated" in out else False,
-            smallest_pitch(nominal, req, freq) if felt else None,
-            smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
-            float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"])))
+            smallest_pitch(nominal, shaped, freq) if felt and shaped else None,
+            smallest_pitch(bound, shaped, freq) if felt and shaped else None, nominal, bound,
+            felt,
+            float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"]),
+            shape=None if not felt or not shaped else (shaped.rows, shaped.cols)))
     for r in results:
-        if r.pitch_mm is not None:
+        if r.pitch_mm is not None and r.shape is not None:
+            r.load = worst_load(r.unit, _shaped(req, r), r.pitch_mm, r.frequency_hz)
+        elif r.pitch_mm is not None:
             r.load = worst_load(r.unit, req, r.pitch_mm, r.frequency_hz)
     feasible = [r for r in results if r.pitch_mm is not None]
     free = req.positions_mm is not None
     if free:
         _check_overlap(req, results)
     best = min(feasible, key=lambda r: _key(r, free)) if feasible else None
+    if best is not None:
+        req = _shaped(req, best)
     result = Plan(req, results, best)
     if best is not None:
         f = best.unit

@@ -24,7 +24,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
               "pitch_mm": _r(c.pitch_mm, 3), "pitch_95_mm": _r(c.pitch_95_mm, 3),
               "edge_to_edge_mm": _r(c.edge_to_edge_mm, 3),
-              "worst_load": _r(c.load), "log_std_center": _r(c.log_std_center),
+              "worst_load": _r(c.load), "shape": c.shape, "log_std_center": _r(c.log_std_center),
               "log_std_profile_max":
               _r(c.log_std_profile_max), "extrapolated": c.extrapolated}
              for c in plan.candidates]
@@ -44,7 +44,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             _r(float(t(best.frequency_hz)), 6)}
     return {
         "format": "hapticrom-plan", "version": 1, "model": req.model,
-        "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid},
+        "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid,
+                  "objective": req.objective, "region_mm": req.region_mm},
         "criterion": criterion,
         "site": req.site, "candidates": cands,
         "best": None if best is None else best.name,

@@ -37,6 +37,9 @@ def _run(args: argparse.Namespace) -> int:
              f"{crit.drive_level:g}")
     shape = (f"{req.cols} free sites" if req.grid == "free" else
              f"{req.rows} x {req.cols} {req.grid} array")
+    if req.objective == "max_sites":
+        shape = (f"most {req.grid} sites in {req.region_mm[0]:g} x {req.region_mm[1]:g} mm "
+                 f"(chosen: {req.rows} x {req.cols})")
     print(f"{shape}, {limit} ({crit.superposition}), model "
           f"{req.model}")
     for family in sorted({c.family for c in plan.candidates if c.family != c.name}):
@@ -52,6 +55,8 @@ def _run(args: argparse.Namespace) -> int:
             f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
         flag = (" [extrapolated]" if c.extrapolated else "") + (
             "" if c.felt else " [own amplitude below the detection threshold]")
+        if c.shape is not None and c.pitch_mm is not None:
+            pitch = f"{c.shape[0]} x {c.shape[1]} sites, " + pitch
         print(f"  {c.name:22s} {c.frequency_hz:6.0f} Hz  center {c.center_um:6.2f} um  "
               f"{pitch}{flag}")
     if plan.best is None:
