@@ -87,3 +87,25 @@ def test_overlapping_free_sites_are_refused_naming_the_site():
         plan_layout(layout_from_dict(_example_free([[0, 0], [30, 0], [31, 0.5]])))
     assert info.value.field == "array.positions_mm[2]"
     assert "overlap" in str(info.value)
+
+
+def test_cli_free_plan_with_any_writes_positions_and_winner_inputs(tmp_path):
+    import json
+
+    from hapticrom.cli import main
+
+    text = (ROOT / "examples" / "forearm-layout.toml").read_text()
+    text = text.replace('"models/nn-default"', repr(str(ROOT / "models" / "nn-default")))
+    text = text.replace('rows = 4', 'positions_mm = [[0, 0], [30, 0], [0, 30]]')
+    text = text.replace('cols = 4', '').replace('grid = "square"', 'grid = "free"')
+    text += '\n[[design]]\nname = "any"\nany = true\nn_candidates = 16\n'
+    layout, out, png = tmp_path / "l.toml", tmp_path / "plan.json", tmp_path / "plan.png"
+    layout.write_text(text)
+    assert main(["plan", str(layout), "--out", str(out), "--plot", str(png)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["positions_mm"] == [[0, 0], [30, 0], [0, 30]] and png.stat().st_size > 0
+    assert len(doc["candidates"]) == (3 + 16) * 3 and doc["array"]["grid"] == "free"
+    best = next(c for c in doc["candidates"] if c["name"] == doc["best"]
+                and c["frequency_hz"] == doc["best_frequency_hz"])
+    assert doc["best_inputs"] == best["inputs"] and best["worst_load"] <= 1.0
+    assert doc["margin"] == pytest.approx(1 / best["worst_load"], rel=1e-3)
