@@ -21,7 +21,11 @@ or a linear actuator at that frequency).
 Free positions (``grid = "free"``): no pitch is chosen; every design and frequency is
 evaluated at the given sites and the feasible one with the smallest worst load (the largest
 margin) wins; its ``pitch_mm`` is the sites' nearest-neighbour distance. Mixed designs in one
-array are not planned (the search would be over assignments).
+array are not planned (the search would be over assignments). ``[[design]] any = true``
+tables are expanded into candidates from the model's trained range
+(:mod:`planner.candidates`) and searched like named designs; ``objective = "max_sites"``
+chooses rows x cols per candidate to fill ``region_mm`` (:mod:`planner.region`) and the most
+sites win.
 """
 
 from __future__ import annotations
