@@ -38,15 +38,21 @@ class UnitField:
     def __post_init__(self) -> None:
         if np.any(self.profile_um <= 0) or self.center_um <= 0:
             raise ValueError("amplitudes must be positive")
-
-    def amplitude(self, r_mm: NDArray) -> NDArray:
-        """Envelope amplitude [um] at centre distances ``r_mm`` >= the edge radius."""
-        d = np.asarray(r_mm, dtype=float) - self.edge_radius_mm
+        # the log envelope and its tail slope, computed once (the pitch search calls
+        # amplitude() many times)
         log_p = np.log(self.profile_um)
         envelope = np.maximum.accumulate(log_p[::-1])[::-1]  # max over all distances >= d
         grid = self.distance_mm
         tail = grid >= grid[-1] - 0.25 * (grid[-1] - grid[0])
         slope = min(np.polyfit(grid[tail], envelope[tail], 1)[0], 0.0) if tail.sum() > 1 else 0.0
+        object.__setattr__(self, "_envelope", envelope)
+        object.__setattr__(self, "_slope", float(slope))
+
+    def amplitude(self, r_mm: NDArray) -> NDArray:
+        """Envelope amplitude [um] at centre distances ``r_mm`` >= the edge radius."""
+        d = np.asarray(r_mm, dtype=float) - self.edge_radius_mm
+        envelope, slope = self._envelope, self._slope  # type: ignore[attr-defined]
+        grid = self.distance_mm
         inside = np.interp(np.clip(d, grid[0], grid[-1]), grid, envelope)
         beyond = envelope[-1] + slope * np.maximum(d - grid[-1], 0.0)
         return np.exp(np.where(d > grid[-1], beyond, inside))

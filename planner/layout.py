@@ -7,7 +7,10 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     [array]
     rows = 4                        # sites per column
     cols = 4                        # sites per row
-    grid = "square"                 # "square" | "hex" (rows offset by half a pitch)
+    grid = "square"                 # "square" | "hex" (rows offset by half a pitch) | "free"
+    # positions_mm = [[0, 0], [18, 0], ...]  # grid = "free" only (no rows/cols): 2-256 sites
+    # objective = "max_sites"       # instead of rows/cols: the most sites that fit in
+    # region_mm = [60, 120]         #   the region [width, height] [mm] (planner.region)
     min_pitch_mm = 5.0              # centre-to-centre pitch searched in [min, max] [mm]
     max_pitch_mm = 60.0
 
@@ -39,6 +42,12 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     orientation = "reverse"
     ...
 
+    [[design]]                      # or: designs drawn from the model's trained range
+    name = "any"
+    any = true                      # inputs given here stay fixed, the others are drawn
+    n_candidates = 64               # [8, 1024] (planner.candidates)
+    seed = 0
+
 Every value is checked here for its type and range; the design inputs are checked against
 the model's own inputs (names, units, trained ranges) when the plan is made.
 """
@@ -50,16 +59,28 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from fieldspec import REQUIRED, Context, FieldError, Spec, read_array, read_table, require_table
+from fieldspec import (
+    Context,
+    FieldError,
+    Spec,
+    read_array,
+    read_fields,
+    read_table,
+    read_value,
+    require_table,
+)
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
            "load_layout"]
 
-GRIDS = ("square", "hex")
+GRIDS = ("square", "hex", "free")
 SUPERPOSITIONS = ("incoherent", "worst")
+OBJECTIVES = ("min_pitch", "max_sites")
 KINDS = ("ratio", "perceptual")
 MAX_SITES_PER_SIDE = 32
+FREE_SITES = (2, 256)  # grid = "free": number of given positions
+POSITION_LIMIT_MM = 1000.0  # |x|, |y| of a free position: the pitch bound's 1 m
 
 
 class LayoutError(FieldError):
@@ -107,13 +128,38 @@ class LayoutRequest:
     designs: tuple[dict[str, Any], ...]
     allow_extrapolation: bool = False
     timing: TimingSpec = TimingSpec()
+    positions_mm: tuple[tuple[float, float], ...] | None = None  # grid = "free" only
+    objective: str = "min_pitch"  # "max_sites": rows x cols chosen to fill region_mm
+    region_mm: tuple[float, float] | None = None  # (width, height) [mm], max_sites only
 
 
 _MODEL = {"path": Spec(str, "models/nn-default"),
           "allow_extrapolation": Spec(bool, False)}
-_ARRAY = {"rows": Spec(int, REQUIRED, f"[1, {MAX_SITES_PER_SIDE}]"),
-          "cols": Spec(int, REQUIRED, f"[1, {MAX_SITES_PER_SIDE}]"),
-          "grid": Spec(str, "square", choices=GRIDS),
+
+
+def _read_positions(value: Any, spec: Spec, path: str, ctx: Context) -> tuple:
+    """``[[x, y], ...]`` [mm]: FREE_SITES sites, each two finite numbers within the limit."""
+    lo, hi = FREE_SITES
+    if not isinstance(value, list | tuple) or not lo <= len(value) <= hi:
+        raise ctx.error(path, f"{path}: expected a list of {lo} to {hi} [x, y] positions [mm], "
+                        f"got {value!r}")
+    xy = Spec(tuple, None, f"[-{POSITION_LIMIT_MM:g}, {POSITION_LIMIT_MM:g}]")
+    out = []
+    for i, item in enumerate(value):
+        where = f"{path}[{i}]"
+        pair = read_value(item, xy, "positions_mm", where, ctx)
+        if len(pair) != 2:
+            raise ctx.error(where, f"{where} = {item!r}: expected two numbers [x, y] [mm]")
+        out.append((pair[0], pair[1]))
+    return tuple(out)
+
+
+_ARRAY = {"grid": Spec(str, "square", choices=GRIDS),
+          "rows": Spec(int, None, f"[1, {MAX_SITES_PER_SIDE}]"),
+          "cols": Spec(int, None, f"[1, {MAX_SITES_PER_SIDE}]"),
+          "positions_mm": Spec(object, None, reader=_read_positions),
+          "objective": Spec(str, "min_pitch", choices=OBJECTIVES),
+          "region_mm": Spec(tuple, None, f"(0, {POSITION_LIMIT_MM:g}]"),
           "min_pitch_mm": Spec(float, 2.0, "(0, 500]"),
           "max_pitch_mm": Spec(float, 100.0, "[array.min_pitch_mm, 1000]")}
 _DRIVE = {"frequencies_hz": Spec(tuple, (120.0,), "(0, 1e4]")}
@@ -145,12 +191,26 @@ def _inputs(raw: Any, path: str, ctx: Context) -> dict[str, Any]:
     return dict(table)
 
 
+# any = true: candidates drawn from the model's trained range (planner.candidates)
+_ANY = {"any": Spec(bool, False),
+        "n_candidates": Spec(int, 64, "[8, 1024]"),
+        "seed": Spec(int, 0, "[0, 4294967295]")}
+
+
 def _design(raw: Any, path: str, i: int, ctx: Context) -> dict[str, Any]:
-    d = _inputs(raw, path, ctx)
+    table = dict(raw) if isinstance(raw, dict) else raw
+    sampling = {k: table.pop(k) for k in _ANY if isinstance(table, dict) and k in table}
+    opts = read_fields(sampling, _ANY, path, ctx)
+    if not opts["any"]:
+        extra = [k for k in ("n_candidates", "seed") if k in sampling]
+        if extra:
+            raise LayoutError(f"{path}.{extra[0]}", f"{path}.{extra[0]}: only with "
+                              f"{path}.any = true")
+    d = _inputs(table, path, ctx)
     name = d.pop("name", f"design{i}")
     if not isinstance(name, str) or not name:
         raise LayoutError(f"{path}.name", f"{path}.name = {name!r}: expected a non-empty text")
-    return {"name": name, "inputs": d}
+    return {"name": name, "inputs": d, **opts}
 
 
 def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
@@ -189,6 +249,45 @@ def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
                          curve)
 
 
+def _sites(array: dict[str, Any]) -> tuple[int, int, tuple | None]:
+    """(rows, cols, positions): a grid needs rows and cols, free positions exclude them (a
+    free layout is one row of its sites)."""
+    given = [k for k in ("rows", "cols") if array[k] is not None]
+    region = array["region_mm"]
+    if region is not None and len(region) != 2:
+        raise LayoutError("array.region_mm", f"array.region_mm = {list(region)}: expected "
+                          "[width, height] [mm]")
+    if array["objective"] == "max_sites":
+        if region is None:
+            raise LayoutError("array.region_mm", 'array.region_mm is missing: objective = '
+                              '"max_sites" needs the region [width, height] [mm]')
+        if array["grid"] == "free":
+            raise LayoutError("array.objective", 'array.objective = "max_sites" needs grid = '
+                              '"square" or "hex"')
+        if given:
+            raise LayoutError(f"array.{given[0]}", f"array.{given[0]}: not with objective = "
+                              '"max_sites" (the plan chooses rows and cols)')
+        return 1, 1, None
+    if region is not None:
+        raise LayoutError("array.region_mm", 'array.region_mm: only with objective = '
+                          '"max_sites"')
+    if array["grid"] == "free":
+        if array["positions_mm"] is None:
+            raise LayoutError("array.positions_mm", 'array.positions_mm is missing: grid = '
+                              '"free" needs the site centres [[x, y], ...] [mm]')
+        if given:
+            raise LayoutError(f"array.{given[0]}", f"array.{given[0]}: not with grid = "
+                              '"free" (the sites are array.positions_mm)')
+        return 1, len(array["positions_mm"]), array["positions_mm"]
+    if array["positions_mm"] is not None:
+        raise LayoutError("array.positions_mm", 'array.positions_mm: only for grid = "free"')
+    for k in ("rows", "cols"):
+        if array[k] is None:
+            raise LayoutError(f"array.{k}", f"array.{k} is missing: give {k} "
+                              f"([1, {MAX_SITES_PER_SIDE}]) or grid = \"free\" with positions_mm")
+    return array["rows"], array["cols"], None
+
+
 def layout_from_dict(d: Any) -> LayoutRequest:
     """Validate a TOML-shaped mapping; raises :class:`LayoutError` naming the field."""
     ctx = Context(LayoutError)
@@ -217,11 +316,14 @@ def layout_from_dict(d: Any) -> LayoutRequest:
         if "frequency_hz" in x["inputs"]:
             raise LayoutError(f"design[{i}].frequency_hz", f"design[{i}].frequency_hz: the "
                               "drive frequency goes in [drive] frequencies_hz")
-    return LayoutRequest(model["path"], array["rows"], array["cols"], array["grid"],
+    rows, cols, positions = _sites(array)
+    return LayoutRequest(model["path"], rows, cols, array["grid"],
                          array["min_pitch_mm"], array["max_pitch_mm"], site,
                          tuple(drive["frequencies_hz"]),
                          _criterion(criterion, tuple(drive["frequencies_hz"])),
-                         tuple(designs), model["allow_extrapolation"], TimingSpec(**timing))
+                         tuple(designs), model["allow_extrapolation"], TimingSpec(**timing),
+                         positions, array["objective"],
+                         None if array["region_mm"] is None else tuple(array["region_mm"]))
 
 
 def load_layout(path: str | Path) -> LayoutRequest:

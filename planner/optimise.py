@@ -18,27 +18,35 @@ training scenes (fem defaults, unbalance 0.006 g mm) spinning at the drive frequ
 force grows with the frequency squared; drive_level scales them linearly (another unbalance,
 or a linear actuator at that frequency).
 
-Only identical units on a regular grid are planned: mixed designs or positions would need a
-search over assignments (the leakage then differs per site), and "any design within the
-model's range" a continuous inner optimisation over the inputs; neither is offered yet.
+Free positions (``grid = "free"``): no pitch is chosen; every design and frequency is
+evaluated at the given sites and the feasible one with the smallest worst load (the largest
+margin) wins; its ``pitch_mm`` is the sites' nearest-neighbour distance. Mixed designs in one
+array are not planned (the search would be over assignments). ``[[design]] any = true``
+tables are expanded into candidates from the model's trained range
+(:mod:`planner.candidates`) and searched like named designs; ``objective = "max_sites"``
+chooses rows x cols per candidate to fill ``region_mm`` (:mod:`planner.region`) and the most
+sites win.
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from planner.candidates import expand_any
 from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
-from planner.layout import LayoutError, LayoutRequest
+from planner.layout import MAX_SITES_PER_SIDE, LayoutError, LayoutRequest
+from planner.region import largest_array, largest_pitch
 from planner.timing import plan_timing
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
 
-__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "loads", "plan_layout", "smallest_pitch",
-           "worst_load"]
+__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "array_positions", "loads", "plan_layout",
+           "smallest_pitch", "worst_load"]
 
 PITCH_TOL_MM = 0.01
 Z95 = 1.959964
@@ -62,6 +70,9 @@ class DesignResult:
     bound: UnitField | None = None  # the 95 % bound field (neighbours high, own low)
     felt: bool = True  # perceptual: own amplitude above the detection threshold
     edge_um: float | None = None  # the surrogate's edge amplitude [um]
+    load: float | None = None  # worst site load at pitch_mm (free positions: at the sites)
+    family: str = ""  # the request's design table (an any = true table: its name)
+    shape: tuple[int, int] | None = None  # max_sites: the (rows, cols) that fit the region
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -84,6 +95,17 @@ class Plan:
     load_95: float | None = None  # worst load at the chosen pitch with the 95 % bound field
     timing: dict[str, Any] | None = None  # planner.timing.plan_timing of the chosen unit
 
+    def shown(self) -> list[DesignResult]:
+        """The candidates worth listing: every named design, and of each ``any = true`` table
+        only its best (the chosen one's key) or, with none feasible, its first."""
+        named = [c for c in self.candidates if c.family == c.name]
+        best: dict[str, DesignResult] = {}
+        for c in self.candidates:
+            if c.family != c.name and (c.family not in best or _better(
+                    c, best[c.family], self.request.positions_mm is not None)):
+                best[c.family] = c
+        return named + list(best.values())
+
     @property
     def margin(self) -> float | None:
         """1 / the worst load at the chosen pitch (>= 1: the criterion holds)."""
@@ -101,9 +123,24 @@ class Plan:
         return self.ratios * np.diag(C) * self.request.criterion.drive_level
 
 
+def array_positions(req: LayoutRequest, pitch_mm: float) -> np.ndarray:
+    """(n, 2) site centres [mm]: the grid at ``pitch_mm``, or the given free positions (the
+    pitch then plays no part)."""
+    if req.positions_mm is not None:
+        return np.array(req.positions_mm, dtype=float)
+    return site_positions(req.rows, req.cols, pitch_mm, req.grid)
+
+
+def nearest_distance_mm(positions: np.ndarray) -> float:
+    """Smallest centre-to-centre distance of the sites [mm] (inf for one site)."""
+    r = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=2)
+    np.fill_diagonal(r, np.inf)
+    return float(r.min())
+
+
 def worst_ratio(f: UnitField, req: LayoutRequest, pitch_mm: float) -> float:
     """Largest leakage / own amplitude over the sites at ``pitch_mm``."""
-    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    pos = array_positions(req, pitch_mm)
     if len(pos) < 2:
         return 0.0
     return float(leakage_ratio(crosstalk_matrix(f, pos), req.criterion.superposition).max())
@@ -121,7 +158,7 @@ def loads(C: np.ndarray, req: LayoutRequest, frequency_hz: float) -> np.ndarray:
 
 def worst_load(f: UnitField, req: LayoutRequest, pitch_mm: float, frequency_hz: float) -> float:
     """Largest site load of the array at ``pitch_mm`` (0 for a single site)."""
-    pos = site_positions(req.rows, req.cols, pitch_mm, req.grid)
+    pos = array_positions(req, pitch_mm)
     if len(pos) < 2:
         return 0.0
     return float(loads(crosstalk_matrix(f, pos), req, frequency_hz).max())
@@ -129,7 +166,13 @@ def worst_load(f: UnitField, req: LayoutRequest, pitch_mm: float, frequency_hz: 
 
 def smallest_pitch(f: UnitField, req: LayoutRequest, frequency_hz: float = 0.0) -> float | None:
     """Smallest pitch in the request's bounds (and >= 2 edge radii) meeting the criterion
-    (``frequency_hz`` sets the threshold of the perceptual one)."""
+    (``frequency_hz`` sets the threshold of the perceptual one). Free positions: their
+    nearest-neighbour distance when the units do not overlap there and every load is <= 1,
+    else None."""
+    if req.positions_mm is not None:
+        near = nearest_distance_mm(array_positions(req, 0.0))
+        fits = near >= 2 * f.edge_radius_mm and worst_load(f, req, near, frequency_hz) <= 1.0
+        return near if fits else None
     lo = max(req.min_pitch_mm, 2 * f.edge_radius_mm)
     hi = req.max_pitch_mm
     if lo > hi or worst_load(f, req, hi, frequency_hz) > 1.0:
@@ -149,15 +192,35 @@ def is_felt(center_um: float, req: LayoutRequest, frequency_hz: float) -> bool:
         center_um * crit.drive_level >= float(crit.threshold(frequency_hz))
 
 
+def _designs(req: LayoutRequest, predictor: Any) -> list[tuple[int, dict[str, Any]]]:
+    """(index in the request, design) for every candidate: named designs as given, each
+    ``any = true`` table expanded (:func:`planner.candidates.expand_any`)."""
+    fixed = {*req.site, "frequency_hz"}
+    out: list[tuple[int, dict[str, Any]]] = []
+    for i, d in enumerate(req.designs):
+        if not d.get("any"):
+            out.append((i, d))
+            continue
+        unknown = [k for k in d["inputs"] if k not in predictor.input_names]
+        if unknown:
+            raise LayoutError(f"design[{i}].{unknown[0]}", f"design[{i}].{unknown[0]}: not an "
+                              f"input of {req.model} (inputs: {', '.join(predictor.input_names)})")
+        try:
+            out += [(i, x) for x in expand_any(d, predictor.specs, fixed, f"design[{i}]")]
+        except ValueError as err:
+            raise LayoutError(f"design[{i}].n_candidates", str(err)) from None
+    return out
+
+
 def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[str, Any]]:
     predictor = load_predictor(req.model)
-    combos = list(itertools.product(req.designs, req.frequencies_hz))
-    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for d, f in combos]
+    combos = list(itertools.product(_designs(req, predictor), req.frequencies_hz))
+    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for (_, d), f in combos]
     names = predictor.input_names
     for i, row in enumerate(rows):
         missing = [n for n in names if n not in row]
         unknown = [k for k in row if k not in names]
-        where = f"design[{req.designs.index(combos[i][0])}]"
+        where = f"design[{combos[i][0][0]}]"
         if unknown:
             raise LayoutError(f"{where}.{unknown[0]}", f"{where}.{unknown[0]}: not an input of "
                               f"{req.model} (inputs: {', '.join(names)})")
@@ -171,12 +234,69 @@ def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[st
         raise LayoutError(f"design.{err.field}", f"design or site input {err}; set "
                           "model.allow_extrapolation = true to plan outside the trained "
                           "range (flagged in the plan)") from None
-    return predictor, combos, out
+    return predictor, [(d, f) for (_, d), f in combos], out
+
+
+def _key(r: DesignResult, free: bool) -> tuple[float, ...]:
+    """Sort key of a feasible candidate: the most sites (max_sites), then the smallest
+    pitch (free positions: smallest worst load), then the larger own amplitude."""
+    sites = -r.shape[0] * r.shape[1] if r.shape is not None else 0
+    return (sites, (r.load if free else r.pitch_mm), -r.center_um)  # type: ignore[return-value]
+
+
+def _shaped(req: LayoutRequest, r: DesignResult) -> LayoutRequest:
+    """The request with the candidate's grid shape (max_sites), else as it is."""
+    return req if r.shape is None else replace(req, rows=r.shape[0], cols=r.shape[1])
+
+
+def _fill_region(f: UnitField, req: LayoutRequest, frequency_hz: float) -> LayoutRequest | None:
+    """max_sites: the request with the most rows x cols that meet the criterion inside
+    ``region_mm`` (None: not even one unit fits); other objectives: the request."""
+    if req.objective != "max_sites":
+        return req
+
+    def top(rows: int, cols: int) -> float:
+        return min(largest_pitch(rows, cols, req.grid, req.region_mm, f.edge_radius_mm),
+                   req.max_pitch_mm)
+
+    def fits(rows: int, cols: int) -> bool:
+        p = top(rows, cols)
+        if p < max(req.min_pitch_mm, 2 * f.edge_radius_mm):
+            return rows * cols == 1 and p > -math.inf
+        shaped = replace(req, rows=rows, cols=cols)
+        return worst_load(f, shaped, p, frequency_hz) <= 1.0
+
+    shape = largest_array(fits, MAX_SITES_PER_SIDE)
+    return None if shape is None else replace(req, rows=shape[0], cols=shape[1])
+
+
+def _better(a: DesignResult, b: DesignResult, free: bool) -> bool:
+    """Whether ``a`` beats ``b`` (a feasible candidate beats an infeasible one)."""
+    if a.pitch_mm is None or b.pitch_mm is None:
+        return a.pitch_mm is not None and b.pitch_mm is None
+    return _key(a, free) < _key(b, free)
+
+
+def _check_overlap(req: LayoutRequest, results: list[DesignResult]) -> None:
+    """Free positions: refuse sites closer than every candidate unit's diameter (naming the
+    later site of the closest pair); a candidate that overlaps while another fits is only
+    infeasible."""
+    pos = array_positions(req, 0.0)
+    smallest = min(2 * r.edge_radius_mm for r in results)
+    r = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2)
+    np.fill_diagonal(r, np.inf)
+    if r.min() >= smallest:
+        return
+    i, j = sorted(np.unravel_index(int(np.argmin(r)), r.shape))
+    raise LayoutError(f"array.positions_mm[{j}]", f"array.positions_mm[{j}] is {r[i, j]:.3g} "
+                      f"mm from array.positions_mm[{i}]: units overlap (the smallest candidate "
+                      f"unit is {smallest:.3g} mm across); sites must be at least that apart")
 
 
 def plan_layout(req: LayoutRequest) -> Plan:
     """Evaluate every design at every drive frequency, pick the smallest feasible pitch
-    (ties: the larger own amplitude)."""
+    (ties: the larger own amplitude); with free positions, the feasible design with the
+    smallest worst load (the largest margin) at the given sites."""
     predictor, combos, out = _predict(req)
     grid = predictor.profile_distance_mm
     results = []
@@ -188,19 +308,32 @@ def plan_layout(req: LayoutRequest) -> Plan:
         bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
                           profile * np.exp(Z95 * s_p))
         felt = is_felt(float(center), req, float(freq))
+        shaped = _fill_region(nominal, req, float(freq)) if felt else req
         results.append(DesignResult(
             design["name"], float(freq), dict(design["inputs"]), float(center), edge,
             float(s_c), float(s_p.max()),
             bool(out["extrapolated"][k]) if "extrapolated" in out else False,
-            smallest_pitch(nominal, req, freq) if felt else None,
-            smallest_pitch(bound, req, freq) if felt else None, nominal, bound, felt,
-            float(out["edge_amplitude_um"][k])))
+            smallest_pitch(nominal, shaped, freq) if felt and shaped else None,
+            smallest_pitch(bound, shaped, freq) if felt and shaped else None, nominal, bound,
+            felt,
+            float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"]),
+            shape=None if not felt or not shaped else (shaped.rows, shaped.cols)))
+    for r in results:
+        if r.pitch_mm is not None and r.shape is not None:
+            r.load = worst_load(r.unit, _shaped(req, r), r.pitch_mm, r.frequency_hz)
+        elif r.pitch_mm is not None:
+            r.load = worst_load(r.unit, req, r.pitch_mm, r.frequency_hz)
     feasible = [r for r in results if r.pitch_mm is not None]
-    best = min(feasible, key=lambda r: (r.pitch_mm, -r.center_um)) if feasible else None
+    free = req.positions_mm is not None
+    if free:
+        _check_overlap(req, results)
+    best = min(feasible, key=lambda r: _key(r, free)) if feasible else None
+    if best is not None:
+        req = _shaped(req, best)
     result = Plan(req, results, best)
     if best is not None:
         f = best.unit
-        result.positions_mm = site_positions(req.rows, req.cols, best.pitch_mm, req.grid)
+        result.positions_mm = array_positions(req, best.pitch_mm)
         result.crosstalk_um = crosstalk_matrix(f, result.positions_mm)
         result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
         result.loads = loads(result.crosstalk_um, req, best.frequency_hz)

@@ -24,7 +24,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
               "pitch_mm": _r(c.pitch_mm, 3), "pitch_95_mm": _r(c.pitch_95_mm, 3),
               "edge_to_edge_mm": _r(c.edge_to_edge_mm, 3),
-              "log_std_center": _r(c.log_std_center), "log_std_profile_max":
+              "worst_load": _r(c.load), "shape": c.shape, "log_std_center": _r(c.log_std_center),
+              "log_std_profile_max":
               _r(c.log_std_profile_max), "extrapolated": c.extrapolated}
              for c in plan.candidates]
     best = plan.best
@@ -43,10 +44,12 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             _r(float(t(best.frequency_hz)), 6)}
     return {
         "format": "hapticrom-plan", "version": 1, "model": req.model,
-        "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid},
+        "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid,
+                  "objective": req.objective, "region_mm": req.region_mm},
         "criterion": criterion,
         "site": req.site, "candidates": cands,
         "best": None if best is None else best.name,
+        "best_inputs": None if best is None else best.inputs,
         "best_frequency_hz": None if best is None else best.frequency_hz,
         "pitch_mm": None if best is None else _r(best.pitch_mm, 3),
         "margin": _r(plan.margin),
@@ -107,7 +110,9 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
             ax.add_patch(Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
         fig.colorbar(sc, ax=ax, label="leakage / own amplitude" if plan.request.criterion.kind
                      == "ratio" else "leakage / detection threshold")
-        ax.set_title(f"{best.name} at {best.frequency_hz:g} Hz: pitch {best.pitch_mm:.2f} mm")
+        spacing = ("nearest sites" if plan.request.grid == "free" else "pitch")
+        ax.set_title(f"{best.name} at {best.frequency_hz:g} Hz: {spacing} "
+                     f"{best.pitch_mm:.2f} mm")
     else:
         ax.set_title("no design meets the criterion within the pitch bounds")
     ax.set_aspect("equal")
@@ -115,7 +120,7 @@ def write_plan_plot(plan: Plan, path: str | Path) -> None:
     ax.set_ylabel("y [mm]")
     crit = plan.request.criterion
     perceptual = crit.kind == "perceptual"
-    for c in plan.candidates:
+    for c in plan.shown():
         f = c.unit
         r = np.linspace(f.edge_radius_mm, plan.request.max_pitch_mm, 300)
         y = f.amplitude(r) * crit.drive_level if perceptual else f.amplitude(r) / f.center_um

@@ -35,14 +35,28 @@ def _run(args: argparse.Namespace) -> int:
     limit = (f"leakage <= {crit.max_ratio:g} of own amplitude" if crit.kind == "ratio" else
              f"leakage below the detection threshold ({crit.threshold.source}), drive level "
              f"{crit.drive_level:g}")
-    print(f"{req.rows} x {req.cols} {req.grid} array, {limit} ({crit.superposition}), model "
+    shape = (f"{req.cols} free sites" if req.grid == "free" else
+             f"{req.rows} x {req.cols} {req.grid} array")
+    if req.objective == "max_sites":
+        shape = (f"most {req.grid} sites in {req.region_mm[0]:g} x {req.region_mm[1]:g} mm "
+                 f"(chosen: {req.rows} x {req.cols})")
+    print(f"{shape}, {limit} ({crit.superposition}), model "
           f"{req.model}")
-    for c in plan.candidates:
+    for family in sorted({c.family for c in plan.candidates if c.family != c.name}):
+        drawn = [c for c in plan.candidates if c.family == family]
+        n_ok = sum(c.pitch_mm is not None for c in drawn)
+        print(f"  {family}: {len(drawn)} candidates drawn from the model's range (designs x "
+              f"frequencies), {n_ok} feasible; its best is listed")
+    for c in plan.shown():
         pitch = "infeasible" if c.pitch_mm is None else (
+            f"nearest sites {c.pitch_mm:6.2f} mm, worst load {c.load:.3f} (margin "
+            f"{1 / c.load if c.load else float('inf'):.3f})" if req.grid == "free" else
             f"pitch {c.pitch_mm:6.2f} mm (edge to edge {c.edge_to_edge_mm:5.2f} mm; with the "
             f"model's 95 % bounds {c.pitch_95_mm or float('nan'):6.2f} mm)")
         flag = (" [extrapolated]" if c.extrapolated else "") + (
             "" if c.felt else " [own amplitude below the detection threshold]")
+        if c.shape is not None and c.pitch_mm is not None:
+            pitch = f"{c.shape[0]} x {c.shape[1]} sites, " + pitch
         print(f"  {c.name:22s} {c.frequency_hz:6.0f} Hz  center {c.center_um:6.2f} um  "
               f"{pitch}{flag}")
     if plan.best is None:
@@ -50,6 +64,9 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(f"best: {plan.best.name} at {plan.best.frequency_hz:g} Hz, pitch "
               f"{plan.best.pitch_mm:.2f} mm, margin {plan.margin:.3f}")
+        if plan.best.family != plan.best.name:
+            print("  inputs: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else
+                                           f"{k} = {v}" for k, v in plan.best.inputs.items()))
         _print_uncertainty(plan)
         _print_timing(plan.timing)
     if verify is not None:
