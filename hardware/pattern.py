@@ -20,7 +20,6 @@ the plan when the pattern is bound to it (:func:`hardware.schedule.build_schedul
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -35,6 +34,7 @@ from fieldspec import (
     read_table,
     require_table,
 )
+from fieldspec.toml import read_toml_file
 
 __all__ = ["MAX_STEPS", "Pattern", "PatternError", "Step", "load_pattern", "pattern_from_dict"]
 
@@ -113,11 +113,4 @@ def pattern_from_dict(d: Any) -> Pattern:
 
 def load_pattern(path: str | Path) -> Pattern:
     """Read and validate a pattern TOML file."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except OSError as err:
-        raise PatternError("<file>", f"cannot read pattern file {str(path)!r}: {err}") from None
-    except tomllib.TOMLDecodeError as err:
-        raise PatternError("<file>", f"{path}: invalid TOML: {err}") from None
-    return pattern_from_dict(data)
+    return pattern_from_dict(read_toml_file(path, PatternError, "pattern file"))

@@ -54,7 +54,6 @@ the model's own inputs (names, units, trained ranges) when the plan is made.
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -69,6 +68,7 @@ from fieldspec import (
     read_value,
     require_table,
 )
+from fieldspec.toml import read_toml_file
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
@@ -328,11 +328,4 @@ def layout_from_dict(d: Any) -> LayoutRequest:
 
 def load_layout(path: str | Path) -> LayoutRequest:
     """Read and validate a layout TOML file."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except OSError as err:
-        raise LayoutError("<file>", f"cannot read layout file {str(path)!r}: {err}") from None
-    except tomllib.TOMLDecodeError as err:
-        raise LayoutError("<file>", f"{path}: invalid TOML: {err}") from None
-    return layout_from_dict(data)
+    return layout_from_dict(read_toml_file(path, LayoutError, "layout file"))

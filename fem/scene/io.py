@@ -14,14 +14,13 @@ from __future__ import annotations
 import hashlib
 import json
 import numbers
-import tomllib
 from collections.abc import Mapping
 from enum import Enum
 from pathlib import Path
 from typing import Any
 
 from fieldspec import Context, Spec, is_bool
-from fieldspec.toml import dumps
+from fieldspec.toml import dumps, read_toml_file
 
 from .model import LoadKind, Scene, SceneError
 from .schedule import Schedule
@@ -42,12 +41,7 @@ def scene_from_dict(d: Mapping[str, Any]) -> Scene:
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene TOML file. Syntax errors raise :class:`SceneError` with
     ``field == "<file>"`` and the line in the message."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except tomllib.TOMLDecodeError as err:
-        raise SceneError("<file>", f"{path}: invalid TOML: {err}") from None
-    return scene_from_dict(data)
+    return scene_from_dict(read_toml_file(path, SceneError, "scene file"))
 
 
 def _plain(value: Any, kind: type) -> Any:

@@ -88,3 +88,26 @@ def test_toml_writer_round_trips_through_tomllib():
         toml_value(float("inf"))
     with pytest.raises(TypeError):
         toml_value(object())
+
+
+def test_read_toml_file_names_the_file_on_every_failure(tmp_path):
+    from fieldspec import FieldError
+    from fieldspec.toml import read_toml_file
+
+    class PatternError(FieldError):
+        pass
+
+    good = tmp_path / "ok.toml"
+    good.write_bytes(b"\xef\xbb\xbf[a]\nx = 1\n")  # a byte-order mark is accepted
+    assert read_toml_file(good, PatternError, "pattern file") == {"a": {"x": 1}}
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[a]\nx = \n")
+    with pytest.raises(PatternError, match=r"bad.toml: invalid TOML.*line 2") as err:
+        read_toml_file(bad, PatternError, "pattern file")
+    assert err.value.field == "<file>"
+    with pytest.raises(PatternError, match=r"cannot read pattern file .*missing\.toml"):
+        read_toml_file(tmp_path / "missing.toml", PatternError, "pattern file")
+    binary = tmp_path / "bin.toml"
+    binary.write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(PatternError, match="invalid TOML"):
+        read_toml_file(binary, PatternError, "pattern file")
