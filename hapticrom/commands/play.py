@@ -17,29 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from hapticrom.commands._args import number_in
 from hapticrom.outputs import atomic_dir, check_output_dir
 
 __all__ = ["register"]
 
 
-def _positive_ms(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0 < v <= 3.6e6:
-        raise argparse.ArgumentTypeError(f"{v} is not in (0, 3600000] ms")
-    return v
-
-
-def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0 < v <= 1:
-        raise argparse.ArgumentTypeError(f"{v} is not in (0, 1]")
-    return v
+_positive_ms = number_in(0.0, 3.6e6, "ms")
+_fraction = number_in(0.0, 1.0)
 
 
 def _run(args: argparse.Namespace) -> int:
