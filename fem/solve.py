@@ -14,7 +14,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from . import elements
+from . import elements, linalg
 from .assembly import DofMap, assemble_matrix, assemble_vector, build_dofmap, prescribed_load
 from .domain import Domain
 
@@ -167,7 +167,7 @@ RESIDUAL_TOLERANCE = 1e-6
 def checked_solve(A: sp.spmatrix, b: NDArray) -> NDArray:
     """Solve A x = b with one factorisation; raise if the answer is not finite or does not
     satisfy the system (a singular operator: an unrestrained body, a mechanism)."""
-    x = factorize(A).solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    x = linalg.factorize(A).solve(b.astype(np.result_type(A.dtype, b.dtype)))
     norm_b = np.linalg.norm(b)
     residual = np.linalg.norm(A @ x - b) / norm_b if norm_b > 0 else np.linalg.norm(x)
     if not np.all(np.isfinite(x)) or residual > RESIDUAL_TOLERANCE:
@@ -175,50 +175,6 @@ def checked_solve(A: sp.spmatrix, b: NDArray) -> NDArray:
             f"the system is singular or ill-posed (relative residual {residual:.1e}): a part of "
             "the model is not restrained; check boundary conditions and effects")
     return x
-
-
-class UmfpackLU:
-    """UMFPACK (SuiteSparse, through cvxopt) LU of a sparse matrix, real or complex.
-
-    Its BLAS-3 frontal kernels factor the 2D Fourier-mode systems here about 5x faster than
-    SuperLU; SuperLU remains the fallback and the choice for many cheap re-solves.
-    """
-
-    def __init__(self, A: sp.spmatrix) -> None:
-        import cvxopt
-        from cvxopt import umfpack
-
-        A = sp.csc_matrix(A)
-        A.sort_indices()
-        self._complex = np.iscomplexobj(A.data)
-        tc = "z" if self._complex else "d"
-        cols = np.repeat(np.arange(A.shape[1]), np.diff(A.indptr))
-        self._A = cvxopt.spmatrix(cvxopt.matrix(A.data.astype(complex if self._complex else float)),
-                                  cvxopt.matrix(A.indices.astype(int)), cvxopt.matrix(cols),
-                                  A.shape, tc)
-        self._umfpack, self._cvxopt = umfpack, cvxopt
-        self._numeric = umfpack.numeric(self._A, umfpack.symbolic(self._A))
-
-    def solve(self, b: NDArray) -> NDArray:
-        """Solve A x = b for b of shape (n,) or (n, k)."""
-        rhs = self._cvxopt.matrix(np.asarray(b, dtype=complex if self._complex else float))
-        self._umfpack.solve(self._A, self._numeric, rhs)
-        return np.array(rhs).reshape(np.shape(b))
-
-
-def factorize(A: sp.spmatrix, many_solves: bool = False):
-    """Sparse LU of A with a fill-reducing ordering, reusable across right-hand sides.
-
-    UMFPACK when cvxopt is installed and few solves follow; SuperLU in symmetric mode (the
-    operators are structurally symmetric) for many cheap re-solves, as in time stepping.
-    """
-    if not many_solves:
-        try:
-            return UmfpackLU(A)
-        except ImportError:
-            pass
-    return spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                     options={"SymmetricMode": True})
 
 
 def natural_modes(domain: Domain, mode: int, k: int = 6,
