@@ -7,6 +7,7 @@ solve forms the dynamic element matrices K* - omega^2 M (+ i omega C) and assemb
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -121,9 +122,11 @@ def condense(Ze: NDArray, inner: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return Ze[:, outer[:, None], outer[None, :]] + np.matmul(Zbc, recover), outer, recover
 
 
+@linalg.one_blas_thread()
 def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0,
                log: OperatorLog | None = None, volumetric: str = "bbar",
-               prescribed=(), extra=()) -> ModeSolution:
+               prescribed=(), extra=(), stages: dict[str, float] | None = None
+               ) -> ModeSolution:
     """Static (omega = 0) or harmonic solve of one mode with one sparse LU factorisation.
 
     Args:
@@ -132,11 +135,15 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         prescribed: (nodes, component, values) Dirichlet data, e.g. exact fields on a boundary.
         extra: (name, element dofs (k, m), matrices (k, m, m)) operators beyond the continuum,
             such as pogo pin springs, on dofs that are not element-interior.
+        stages: if given, the wall time (s) of each stage is added under its name (the
+            benchmark's stage table, bench/bench_solver.py).
     """
     log = log if log is not None else OperatorLog()
+    t = time.perf_counter()
     mesh = domain.mesh
     stretch = domain.stretch if omega > 0 else None
     Ze = dynamic_element_matrices(domain, mode, omega, log, volumetric, stretch)
+    t = _lap(stages, "element matrices", t)
     inner = interior_dofs(mode, mesh.order)
     fixed = domain.fixed()
     if inner.size:
@@ -144,36 +151,56 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         fixed += [(centres, c) for c in range(elements.dofs_per_node(mode))]
     dm = build_dofmap(mesh, mode, fixed, prescribed, domain.ties)
     element_dofs = dm.element_dofs
+    t = _lap(stages, "dof map", t)
     if inner.size:
         Ze, outer, recover = condense(Ze, inner)
         dm = replace(dm, element_dofs=element_dofs[:, outer])
+    t = _lap(stages, "static condensation", t)
     A = assemble_matrix(dm, Ze)
     for name, edofs, Ke in extra:
         A = A + assemble_matrix(dm, Ke, edofs)
         log.add(name, mode)
     rhs = assemble_vector(dm, load_full) + prescribed_load(dm, Ze)
-    u = dm.expand(checked_solve(A, rhs))
+    _lap(stages, "assembly", t)
+    x = checked_solve(A, rhs, stages)
+    t = time.perf_counter()
+    u = dm.expand(x)
     if inner.size:
         u = u.astype(np.result_type(u, recover))
         u[element_dofs[:, inner]] = np.einsum("ecb,eb->ec", recover, u[dm.element_dofs])
+    _lap(stages, "recovery", t)
     # unknowns of the discretisation: the global system plus the condensed interior dofs
     return ModeSolution(mode, dm, u, dm.n_free + mesh.n_elements * inner.size)
+
+
+def _lap(stages: dict[str, float] | None, name: str, t0: float) -> float:
+    """Add the time since ``t0`` (s) to ``stages[name]`` (when recording); the time now."""
+    now = time.perf_counter()
+    if stages is not None:
+        stages[name] = stages.get(name, 0.0) + now - t0
+    return now
 
 
 #: Largest relative residual ||A x - b|| / ||b|| a direct solve may leave.
 RESIDUAL_TOLERANCE = 1e-6
 
 
-def checked_solve(A: sp.spmatrix, b: NDArray) -> NDArray:
+def checked_solve(A: sp.spmatrix, b: NDArray,
+                  stages: dict[str, float] | None = None) -> NDArray:
     """Solve A x = b with one factorisation; raise if the answer is not finite or does not
     satisfy the system (a singular operator: an unrestrained body, a mechanism)."""
-    x = linalg.factorize(A).solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    t = time.perf_counter()
+    lu = linalg.factorize(A)
+    t = _lap(stages, "factor", t)
+    x = lu.solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    t = _lap(stages, "solve", t)
     norm_b = np.linalg.norm(b)
     residual = np.linalg.norm(A @ x - b) / norm_b if norm_b > 0 else np.linalg.norm(x)
     if not np.all(np.isfinite(x)) or residual > RESIDUAL_TOLERANCE:
         raise FloatingPointError(
             f"the system is singular or ill-posed (relative residual {residual:.1e}): a part of "
             "the model is not restrained; check boundary conditions and effects")
+    _lap(stages, "residual", t)
     return x
 
 

@@ -102,6 +102,7 @@ class TransientResult:
     wall_s: float
 
 
+@linalg.one_blas_thread()
 def solve_transient(
     M: sp.spmatrix | sp.sparray | np.ndarray,
     K: sp.spmatrix | sp.sparray | np.ndarray,
