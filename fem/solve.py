@@ -15,7 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from . import elements, linalg
+from . import columns, elements, linalg
 from .assembly import DofMap, assemble_matrix, assemble_vector, build_dofmap, prescribed_load
 from .domain import Domain
 
@@ -42,7 +42,8 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
     """K* - omega^2 M + i omega C per element: stiffness with hysteretic moduli E (1 + i eta),
     mass when omega > 0, the PML stretch and the damping layer when the domain has them.
 
-    Elements outside the PML are formed in real arithmetic; complex factors enter only where an
+    Elements are formed column by column (:mod:`fem.columns`), except those in a PML in z;
+    elements outside the PML are formed in real arithmetic, complex factors enter only where an
     effect needs them.
     """
     mesh = domain.mesh
@@ -55,19 +56,27 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
     damped = domain.damping is not None and omega > 0
     is_complex = hysteretic or damped or bool(in_pml.any())
     nd = mesh.elements.shape[1] * elements.dofs_per_node(mode)
-    Z = np.empty((mesh.n_elements, nd, nd), dtype=complex if is_complex else float)
-    for idx, st in ((np.flatnonzero(~in_pml), None), (np.flatnonzero(in_pml), stretch)):
-        if idx.size == 0:
-            continue
-        g = elements.gauss_data(mesh, st, subset=idx)
-        Ze = elements.stiffness(g, mode, mu[idx], kappa[idx], volumetric)
-        if hysteretic:  # nu is real, so E (1 + i eta) scales mu and kappa alike
-            Ze = Ze * (1.0 + 1j * eta[idx])[:, None, None]
+    mu_star = mu * (1.0 + 1j * eta) if hysteretic else mu  # nu is real: E (1 + i eta) scales
+    kappa_star = kappa * (1.0 + 1j * eta) if hysteretic else kappa  # mu and kappa alike
+    by_column = columns.column_path(mesh, stretch)
+    idx = np.flatnonzero(by_column)
+    coef = np.column_stack([mu_star[idx], kappa_star[idx], -omega**2 * density[idx]])
+    Zc = columns.column_matrices(mesh, idx, stretch, mode, coef, volumetric)
+    if idx.size == mesh.n_elements and (Zc.dtype == complex or not is_complex):
+        Z = Zc
+    else:
+        Z = np.empty((mesh.n_elements, nd, nd), dtype=complex if is_complex else float)
+        Z[idx] = Zc
+    idx = np.flatnonzero(~by_column)  # elements in a PML in z: element by element
+    if idx.size:
+        g = elements.gauss_data(mesh, stretch, subset=idx)
+        Ze = elements.stiffness(g, mode, mu_star[idx], kappa_star[idx], volumetric)
         if omega > 0:
             Ze = Ze - omega**2 * elements.mass(g, mode, density[idx])
-        if damped:
-            Ze = Ze + 1j * omega * damping_layer_matrices(domain, g, mode, density[idx])
         Z[idx] = Ze
+    if damped:
+        g = elements.gauss_data(mesh)
+        Z += 1j * omega * damping_layer_matrices(domain, g, mode, density)
     log.add("stiffness", mode)
     if hysteretic:
         log.add("hysteretic damping", mode)
