@@ -1,0 +1,54 @@
+"""Assembly through the cached scatter map equals the plain COO -> CSR path."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fem import assembly
+from fem.assembly import UZ, assemble_matrix, build_dofmap, scatter_map
+from fem.mesh import build_mesh
+
+
+def _dofmap(mode: int):
+    mesh = build_mesh(np.linspace(0.0, 1e-2, 5), np.linspace(0.0, 2e-2, 4),
+                      np.zeros((3, 4), dtype=int), 2)
+    base = mesh.nodes_where(lambda r, z: np.isclose(z, 2e-2))
+    side = mesh.nodes_where(lambda r, z: np.isclose(r, 1e-2))
+    ties = ((side[1:], side[:-1], UZ),)  # follower/leader pairs: coefficients and merged dofs
+    return build_dofmap(mesh, mode, [(base, 0), (base, 1)], ties=ties)
+
+
+def test_cached_map_matches_coo_path():
+    for mode in (0, 1, 2):
+        dm = _dofmap(mode)
+        rng = np.random.default_rng(mode)
+        nd = dm.element_dofs.shape[1]
+        Ke = rng.normal(size=(dm.element_dofs.shape[0], nd, nd)) * (1 + 0.5j)
+        first = assemble_matrix(dm, Ke)  # first sight: COO path
+        assert scatter_map(dm, dm.element_dofs) is not None  # second sight builds the map
+        again = assemble_matrix(dm, Ke)
+        assert again.shape == first.shape == (dm.n_free, dm.n_free)
+        assert np.abs((again - first).toarray()).max() <= 1e-14 * np.abs(first.data).max()
+        # structure is canonical: sorted columns, no duplicates
+        again_copy = again.copy()
+        again_copy.sum_duplicates()
+        assert again_copy.nnz == again.nnz
+        assert np.all(np.diff(again.indices[again.indptr[0]:again.indptr[1]]) > 0)
+        # the map is shared, the arrays of each matrix are not
+        again.indices[:] = 0
+        assert np.abs((assemble_matrix(dm, Ke) - first).toarray()).max() <= (
+            1e-14 * np.abs(first.data).max())
+
+
+def test_map_cache_is_bounded(monkeypatch):
+    monkeypatch.setattr(assembly, "MAP_CACHE_SIZE", 2)
+    monkeypatch.setattr(assembly, "_maps", type(assembly._maps)())
+    maps = []
+    for mode in (0, 1, 2):
+        dm = _dofmap(mode)
+        scatter_map(dm, dm.element_dofs)
+        maps.append(scatter_map(dm, dm.element_dofs))
+    assert all(m is not None for m in maps)
+    assert len(assembly._maps) == 2  # the oldest (mode 0) was dropped
+    dm0 = _dofmap(0)
+    assert assembly._map_key(dm0, dm0.element_dofs) not in assembly._maps
