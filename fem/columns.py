@@ -48,14 +48,15 @@ def column_path(mesh: Mesh, stretch) -> NDArray:
 def column_matrices(mesh: Mesh, idx: NDArray, stretch, mode: int, coef: NDArray,
                     volumetric: str = "bbar") -> NDArray:
     """Element matrices of elements ``idx`` (all on :func:`column_path`) as a linear combination
-    ``coef[:, 0] K_mu + coef[:, 1] K_kappa + coef[:, 2] M`` of the stiffness per unit shear
-    modulus, per unit bulk modulus (Pa^-1 scaled: N/m per Pa) and the mass per unit density.
+    ``coef[:, 0] K_mu + coef[:, 1] K_kappa (+ coef[:, 2] M)`` of the stiffness per unit shear
+    modulus, per unit bulk modulus (N/m per Pa) and, only when ``coef`` has a third column, the
+    mass per unit density (no mass is formed otherwise).
 
     Args:
         idx: element indices (k,).
         stretch: the PML (r stretch only on these elements) or None; applied to the columns
             inside it (``stretch.contains``).
-        coef: (k, 3) shear modulus (Pa), bulk modulus (Pa) and the mass factor (e.g.
+        coef: (k, 2) or (k, 3) shear modulus (Pa), bulk modulus (Pa) and the mass factor (e.g.
             -omega^2 rho in kg/(m^3 s^2)); complex for hysteretic moduli.
 
     Returns:
@@ -76,23 +77,27 @@ def column_matrices(mesh: Mesh, idx: NDArray, stretch, mode: int, coef: NDArray,
                       for c in range(keys.shape[0])])
     h = hz[order] / h_ref[col[order]]
     powers = np.column_stack([h, np.ones_like(h), 1.0 / h])  # (k, 3): P, Q, R
-    weights = (coef[order][:, :, None] * powers[:, None, :]).reshape(idx.size, 9)
+    kinds = coef.shape[1]
+    if kinds not in (2, 3):
+        raise ValueError(f"coef has {kinds} columns: allowed 2 (stiffness) or 3 (and mass)")
+    weights = (coef[order][:, :, None] * powers[:, None, :]).reshape(idx.size, 3 * kinds)
     for pml in (False, True):
         cols = np.flatnonzero(keys[:, 2] == pml)
         if cols.size == 0:
             continue
         basis = _column_basis(mesh, keys[cols, 0], keys[cols, 1], h_ref[cols],
-                              stretch if pml else None, mode, volumetric).astype(dtype)
+                              stretch if pml else None, mode, volumetric, kinds == 3
+                              ).astype(dtype)
         for j, c in enumerate(cols):
             at = slice(bounds[c], bounds[c + 1])
-            np.matmul(weights[at], basis[j], out=sorted_out[at])  # (n, 9) x (9, nd^2)
+            np.matmul(weights[at], basis[j], out=sorted_out[at])  # (n, 6|9) x (6|9, nd^2)
     out[order] = sorted_out
     return out.reshape(idx.size, nd, nd)
 
 
 def _column_basis(mesh: Mesh, r0: NDArray, hr: NDArray, h_ref: NDArray, stretch, mode: int,
-                  volumetric: str) -> NDArray:
-    """(nc, 9, nd^2): for each column and each of (K_mu, K_kappa, M) the P, Q, R of
+                  volumetric: str, with_mass: bool) -> NDArray:
+    """(nc, 3 kinds, nd^2): for each column and each of (K_mu, K_kappa[, M]) the P, Q, R of
     Z(h) = h' P + Q + R / h' with h' = h / h_ref."""
     nc, npr = r0.size, _PROBES.size
     cells = np.arange(nc * npr)
@@ -102,9 +107,11 @@ def _column_basis(mesh: Mesh, r0: NDArray, hr: NDArray, h_ref: NDArray, stretch,
                     cell_hz=hz)
     g = elements.gauss_data(probe, stretch, subset=cells)
     one, zero = np.ones(cells.size), np.zeros(cells.size)
-    samples = np.stack([elements.stiffness(g, mode, one, zero, volumetric),
-                        elements.stiffness(g, mode, zero, one, volumetric),
-                        elements.mass(g, mode, one)], axis=1)  # (nc * 3 probes, 3 kinds, ...)
-    samples = samples.reshape(nc, npr, 3, -1)
+    parts = [elements.stiffness(g, mode, one, zero, volumetric),
+             elements.stiffness(g, mode, zero, one, volumetric)]
+    if with_mass:
+        parts.append(elements.mass(g, mode, one))
+    kinds = len(parts)
+    samples = np.stack(parts, axis=1)  # (nc * 3 probes, kinds, nd, nd)
     pqr = _FIT @ samples.reshape(nc, npr, -1).transpose(1, 0, 2).reshape(npr, -1)
-    return pqr.reshape(3, nc, 3, -1).transpose(1, 2, 0, 3).reshape(nc, 9, -1)
+    return pqr.reshape(3, nc, kinds, -1).transpose(1, 2, 0, 3).reshape(nc, 3 * kinds, -1)

@@ -60,7 +60,8 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
     kappa_star = kappa * (1.0 + 1j * eta) if hysteretic else kappa  # mu and kappa alike
     by_column = columns.column_path(mesh, stretch)
     idx = np.flatnonzero(by_column)
-    coef = np.column_stack([mu_star[idx], kappa_star[idx], -omega**2 * density[idx]])
+    coef = np.column_stack([mu_star[idx], kappa_star[idx]]
+                           + ([-omega**2 * density[idx]] if omega > 0 else []))
     Zc = columns.column_matrices(mesh, idx, stretch, mode, coef, volumetric)
     if idx.size == mesh.n_elements and (Zc.dtype == complex or not is_complex):
         Z = Zc

@@ -60,3 +60,19 @@ def test_elements_in_a_pml_in_z_are_left_to_the_element_path():
     on = columns.column_path(mesh, pml)
     assert np.array_equal(on, mesh.cell_z0 + mesh.cell_hz <= 15e-3 * (1 + 1e-12))
     assert on.any() and not on.all()
+
+
+def test_stiffness_only_forms_no_mass(monkeypatch):
+    mesh = _mesh(2)
+    idx = np.arange(mesh.n_elements)
+    coef = np.tile([1e4, 3e5], (idx.size, 1))
+    want = _reference(mesh, idx, None, 1, np.column_stack([coef, np.zeros(idx.size)]), "bbar")
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("mass formed for a stiffness-only combination")
+
+    monkeypatch.setattr(elements, "mass", forbidden)
+    got = columns.column_matrices(mesh, idx, None, 1, coef)
+    assert np.abs(got - want).max() <= 1e-11 * np.abs(want).max()
+    with pytest.raises(ValueError, match="coef has 4 columns"):
+        columns.column_matrices(mesh, idx, None, 1, np.ones((idx.size, 4)))
