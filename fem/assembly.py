@@ -158,16 +158,19 @@ class ScatterMap:
     indptr: NDArray
     indices: NDArray
     scatter: sp.csr_matrix
+    fmt: str = "csr"
 
     @classmethod
-    def build(cls, dm: DofMap, edofs: NDArray) -> ScatterMap:
+    def build(cls, dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
+        """The map into CSR (``fmt = "csr"``) or CSC (``"csc"``) storage."""
         n = dm.n_free
         rows, coefs = dm.master[edofs], dm.coef[edofs]
         nd = edofs.shape[1]
         R = np.broadcast_to(rows[:, :, None], (rows.shape[0], nd, nd)).ravel()
         C = np.broadcast_to(rows[:, None, :], (rows.shape[0], nd, nd)).ravel()
         pos = np.flatnonzero((R >= 0) & (C >= 0))
-        key = R[pos].astype(np.int64) * n + C[pos]
+        major, minor = (R, C) if fmt == "csr" else (C, R)
+        key = major[pos].astype(np.int64) * n + minor[pos]
         order = np.argsort(key, kind="stable")
         sorted_key = key[order]
         first = np.concatenate([[True], sorted_key[1:] != sorted_key[:-1]])
@@ -177,25 +180,27 @@ class ScatterMap:
         indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
         product = (coefs[:, :, None] * coefs[:, None, :]).ravel()[pos]
         scatter = sp.csr_matrix((product, (slot, pos)), shape=(unique.size, R.size))
-        return cls((n, n), indptr, (unique % n).astype(np.int32), scatter)
+        return cls((n, n), indptr, (unique % n).astype(np.int32), scatter, fmt)
 
-    def assemble(self, Ke: NDArray) -> sp.csr_matrix:
+    def assemble(self, Ke: NDArray) -> sp.csr_matrix | sp.csc_matrix:
         data = self.scatter @ Ke.reshape(-1)
-        return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=self.shape)
+        kind = sp.csr_matrix if self.fmt == "csr" else sp.csc_matrix
+        return kind((data, self.indices.copy(), self.indptr.copy()), shape=self.shape)
 
 
-def _map_key(dm: DofMap, edofs: NDArray) -> bytes:
+def _map_key(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> bytes:
     h = hashlib.blake2b(digest_size=16)
+    h.update(fmt.encode())
     for a in (np.asarray([dm.n_free, *edofs.shape]), dm.master, dm.coef, edofs):
         h.update(np.ascontiguousarray(a).tobytes())
     return h.digest()
 
 
-def scatter_map(dm: DofMap, edofs: NDArray) -> ScatterMap | None:
+def scatter_map(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap | None:
     """The cached scatter map of this (dof map, element dofs) topology; built on its second
     use in this process (a topology seen once pays the plain COO path, building a map costs
     about as much as one COO -> CSR), None before."""
-    key = _map_key(dm, edofs)
+    key = _map_key(dm, edofs, fmt)
     if key in _maps:
         _maps.move_to_end(key)
         return _maps[key]
@@ -204,21 +209,23 @@ def scatter_map(dm: DofMap, edofs: NDArray) -> ScatterMap | None:
         while len(_seen) > 8 * MAP_CACHE_SIZE:
             _seen.popitem(last=False)
         return None
-    _maps[key] = ScatterMap.build(dm, edofs)
+    _maps[key] = ScatterMap.build(dm, edofs, fmt)
     while len(_maps) > MAP_CACHE_SIZE:
         _maps.popitem(last=False)
     return _maps[key]
 
 
-def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
-                    ) -> sp.csr_matrix:
+def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None,
+                    fmt: str = "csr") -> sp.csr_matrix | sp.csc_matrix:
     """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix.
 
     ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
-    pass their own full dof indices. A topology assembled before goes through its cached
-    :class:`ScatterMap`."""
+    pass their own full dof indices. ``fmt`` "csr" or "csc" (what a factorisation takes, saving
+    the conversion). A topology assembled before goes through its cached :class:`ScatterMap`."""
+    if fmt not in ("csr", "csc"):
+        raise ValueError(f"fmt = {fmt!r}: allowed 'csr' or 'csc'")
     edofs = dm.element_dofs if element_dofs is None else element_dofs
-    cached = scatter_map(dm, edofs)
+    cached = scatter_map(dm, edofs, fmt)
     if cached is not None:
         return cached.assemble(Ke)
     rows = dm.master[edofs]
@@ -228,7 +235,7 @@ def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
     keep = (R >= 0) & (C >= 0)
     vals = (Ke * (coefs[:, :, None] * coefs[:, None, :]))[keep]
     A = sp.coo_matrix((vals, (R[keep], C[keep])), shape=(dm.n_free, dm.n_free))
-    return A.tocsr()
+    return A.tocsr() if fmt == "csr" else A.tocsc()
 
 
 def assemble_vector(dm: DofMap, f_full: NDArray) -> NDArray:

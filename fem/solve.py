@@ -166,9 +166,9 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         Ze, outer, recover = condense(Ze, inner)
         dm = replace(dm, element_dofs=element_dofs[:, outer])
     t = _lap(stages, "static condensation", t)
-    A = assemble_matrix(dm, Ze)
+    A = assemble_matrix(dm, Ze, fmt="csc")  # SuperLU's storage: no conversion
     for name, edofs, Ke in extra:
-        A = A + assemble_matrix(dm, Ke, edofs)
+        A = A + assemble_matrix(dm, Ke, edofs, fmt="csc")
         log.add(name, mode)
     rhs = assemble_vector(dm, load_full) + prescribed_load(dm, Ze)
     _lap(stages, "assembly", t)

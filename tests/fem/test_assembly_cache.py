@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from fem import assembly
 from fem.assembly import UZ, assemble_matrix, build_dofmap, scatter_map
@@ -34,6 +35,10 @@ def test_cached_map_matches_coo_path():
         again_copy.sum_duplicates()
         assert again_copy.nnz == again.nnz
         assert np.all(np.diff(again.indices[again.indptr[0]:again.indptr[1]]) > 0)
+        for _ in range(2):  # CSC: first sight COO, then its own map
+            csc = assemble_matrix(dm, Ke, fmt="csc")
+            assert csc.format == "csc"
+            assert np.abs((csc - first).toarray()).max() <= 1e-14 * np.abs(first.data).max()
         # the map is shared, the arrays of each matrix are not
         again.indices[:] = 0
         assert np.abs((assemble_matrix(dm, Ke) - first).toarray()).max() <= (
@@ -52,3 +57,10 @@ def test_map_cache_is_bounded(monkeypatch):
     assert len(assembly._maps) == 2  # the oldest (mode 0) was dropped
     dm0 = _dofmap(0)
     assert assembly._map_key(dm0, dm0.element_dofs) not in assembly._maps
+
+
+def test_unknown_format_is_refused():
+    dm = _dofmap(0)
+    nd = dm.element_dofs.shape[1]
+    with pytest.raises(ValueError, match="fmt = 'coo': allowed 'csr' or 'csc'"):
+        assemble_matrix(dm, np.zeros((dm.element_dofs.shape[0], nd, nd)), fmt="coo")
