@@ -9,6 +9,7 @@ transformation product T^T K T is ever formed.
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -141,7 +142,7 @@ def build_dofmap(mesh: Mesh, mode: int,
 MAP_CACHE_SIZE = 4
 
 _maps: OrderedDict[bytes, ScatterMap] = OrderedDict()
-_seen: OrderedDict[bytes, None] = OrderedDict()
+_lock = threading.Lock()  # dask runs solves on threads of one process
 
 
 @dataclass(frozen=True)
@@ -150,8 +151,8 @@ class ScatterMap:
 
     ``scatter`` (nnz, ne * nd * nd) holds the constraint coefficient products (+-1) of the
     kept entries, so assembly is one sparse product ``scatter @ Ke.ravel()``: no COO sort and
-    no duplicate summing per solve (on the default forearm 18 ms against 35-140 ms for
-    COO -> CSR on the loaded 2-core machine; bench/bench_solver.py).
+    no duplicate summing per solve (default forearm: 9 ms against 35-39 ms for COO -> CSR;
+    bench/bench_solver.py). Duplicates are summed in element order.
     """
 
     shape: tuple[int, int]
@@ -165,21 +166,22 @@ class ScatterMap:
         """The map into CSR (``fmt = "csr"``) or CSC (``"csc"``) storage."""
         n = dm.n_free
         rows, coefs = dm.master[edofs], dm.coef[edofs]
-        nd = edofs.shape[1]
-        R = np.broadcast_to(rows[:, :, None], (rows.shape[0], nd, nd)).ravel()
-        C = np.broadcast_to(rows[:, None, :], (rows.shape[0], nd, nd)).ravel()
-        pos = np.flatnonzero((R >= 0) & (C >= 0))
-        major, minor = (R, C) if fmt == "csr" else (C, R)
-        key = major[pos].astype(np.int64) * n + minor[pos]
-        order = np.argsort(key, kind="stable")
+        major, minor = (rows[:, :, None], rows[:, None, :]) if fmt == "csr" else (
+            rows[:, None, :], rows[:, :, None])
+        keys = (major.astype(np.int64) * n + minor).ravel()
+        valid = rows >= 0
+        pos = np.flatnonzero((valid[:, :, None] & valid[:, None, :]).ravel())
+        key = keys[pos]
+        order = np.argsort(key, kind="stable")  # equal keys keep element order
         sorted_key = key[order]
-        first = np.concatenate([[True], sorted_key[1:] != sorted_key[:-1]])
-        slot = np.empty(pos.size, dtype=np.int64)
-        slot[order] = np.cumsum(first) - 1
+        first = np.flatnonzero(np.concatenate([[True], sorted_key[1:] != sorted_key[:-1]]))
         unique = sorted_key[first]
         indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
-        product = (coefs[:, :, None] * coefs[:, None, :]).ravel()[pos]
-        scatter = sp.csr_matrix((product, (slot, pos)), shape=(unique.size, R.size))
+        entries = pos[order]
+        product = (coefs[:, :, None] * coefs[:, None, :]).ravel()[entries]
+        # row s of the scatter matrix lists, in element order, the entries summed into slot s
+        scatter = sp.csr_matrix((product, entries, np.append(first, pos.size)),
+                                shape=(unique.size, keys.size))
         return cls((n, n), indptr, (unique % n).astype(np.int32), scatter, fmt)
 
     def assemble(self, Ke: NDArray) -> sp.csr_matrix | sp.csc_matrix:
@@ -196,23 +198,22 @@ def _map_key(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> bytes:
     return h.digest()
 
 
-def scatter_map(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap | None:
-    """The cached scatter map of this (dof map, element dofs) topology; built on its second
-    use in this process (a topology seen once pays the plain COO path, building a map costs
-    about as much as one COO -> CSR), None before."""
+def scatter_map(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
+    """The scatter map of this (dof map, element dofs) topology, cached per process.
+
+    Every assembly goes through a map, so the summation order and hence every bit of the
+    result never depends on what was assembled before (the process pool and a threaded dask
+    cluster give identical rows). Building one costs about 53 ms on the default forearm, 15 ms
+    more than one COO -> CSR; each later assembly of the topology costs 9 ms."""
     key = _map_key(dm, edofs, fmt)
-    if key in _maps:
-        _maps.move_to_end(key)
-        return _maps[key]
-    if key not in _seen:
-        _seen[key] = None
-        while len(_seen) > 8 * MAP_CACHE_SIZE:
-            _seen.popitem(last=False)
-        return None
-    _maps[key] = ScatterMap.build(dm, edofs, fmt)
-    while len(_maps) > MAP_CACHE_SIZE:
-        _maps.popitem(last=False)
-    return _maps[key]
+    with _lock:
+        if key in _maps:
+            _maps.move_to_end(key)
+            return _maps[key]
+        built = _maps[key] = ScatterMap.build(dm, edofs, fmt)
+        while len(_maps) > MAP_CACHE_SIZE:
+            _maps.popitem(last=False)
+        return built
 
 
 def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None,
@@ -221,21 +222,11 @@ def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
 
     ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
     pass their own full dof indices. ``fmt`` "csr" or "csc" (what a factorisation takes, saving
-    the conversion). A topology assembled before goes through its cached :class:`ScatterMap`."""
+    the conversion). Goes through the topology's cached :class:`ScatterMap`."""
     if fmt not in ("csr", "csc"):
         raise ValueError(f"fmt = {fmt!r}: allowed 'csr' or 'csc'")
     edofs = dm.element_dofs if element_dofs is None else element_dofs
-    cached = scatter_map(dm, edofs, fmt)
-    if cached is not None:
-        return cached.assemble(Ke)
-    rows = dm.master[edofs]
-    coefs = dm.coef[edofs]
-    R = np.broadcast_to(rows[:, :, None], Ke.shape)
-    C = np.broadcast_to(rows[:, None, :], Ke.shape)
-    keep = (R >= 0) & (C >= 0)
-    vals = (Ke * (coefs[:, :, None] * coefs[:, None, :]))[keep]
-    A = sp.coo_matrix((vals, (R[keep], C[keep])), shape=(dm.n_free, dm.n_free))
-    return A.tocsr() if fmt == "csr" else A.tocsc()
+    return scatter_map(dm, edofs, fmt).assemble(Ke)
 
 
 def assemble_vector(dm: DofMap, f_full: NDArray) -> NDArray:
