@@ -41,6 +41,7 @@ lint: $(STAMP)
 	$(BIN)/lint-imports
 
 bench: $(STAMP)
+	$(BIN)/python bench/bench_solver.py $(if $(BASELINE),--baseline $(BASELINE))
 	$(BIN)/python bench/bench_fem.py
 	$(BIN)/python bench/bench_effects.py
 	$(BIN)/python bench/bench_absorber.py

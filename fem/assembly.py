@@ -8,8 +8,11 @@ transformation product T^T K T is ever formed.
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -43,8 +46,6 @@ class DofMap:
     prescribed: NDArray
     element_dofs: NDArray
     n_free: int
-    # ScatterMaps by element-dof array (see scatter_map); a `replace` starts an empty cache.
-    _scatter: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_full(self) -> int:
@@ -136,107 +137,96 @@ def build_dofmap(mesh: Mesh, mode: int,
                   int(primary.sum()))
 
 
+#: Scatter maps kept per process (each about 12 bytes per element-matrix entry: 9 MB for the
+#: default forearm), least recently used dropped first.
+MAP_CACHE_SIZE = 4
+
+_maps: OrderedDict[bytes, ScatterMap] = OrderedDict()
+_lock = threading.Lock()  # dask runs solves on threads of one process
+
+
 @dataclass(frozen=True)
 class ScatterMap:
-    """Where every kept element-matrix entry lands in the CSR data of the reduced matrix.
+    """Where every element-matrix entry lands in the CSR data of the reduced matrix.
 
-    Built once per (dofmap, element-dof array) by one stable sort of the (row, col) keys, so
-    assembling values is a gather and one segmented sum (``np.add.reduceat``) straight into the
-    CSR data: no COO -> CSR conversion and no duplicate summing per assembly. Entries are summed
-    in element order, as COO -> CSR does, so the result equals it to round-off.
-
-    Attributes:
-        gather: (m,) flat indices into Ke.reshape(-1) of the kept entries, sorted by (row, col).
-        scale: (m,) product of the two dof coefficients of each gathered entry, or None when all
-            are +1.
-        starts: (nnz,) first gathered entry of each CSR entry.
-        indptr, indices: CSR structure of the reduced matrix (sorted column indices).
-        shape: (ne, nd, nd) element-matrix shape the map was built for.
+    ``scatter`` (nnz, ne * nd * nd) holds the constraint coefficient products (+-1) of the
+    kept entries, so assembly is one sparse product ``scatter @ Ke.ravel()``: no COO sort and
+    no duplicate summing per solve (default forearm: 9 ms against 35-39 ms for COO -> CSR;
+    bench/bench_solver.py). Duplicates are summed in element order.
     """
 
-    gather: NDArray
-    scale: NDArray | None
-    starts: NDArray
+    shape: tuple[int, int]
     indptr: NDArray
     indices: NDArray
-    shape: tuple[int, int, int]
+    scatter: sp.csr_matrix
+    fmt: str = "csr"
 
-    def assemble(self, Ke: NDArray, n: int) -> sp.csr_matrix:
-        """The reduced (n, n) CSR matrix of element matrices ``Ke`` of shape ``self.shape``."""
-        vals = np.ascontiguousarray(Ke).reshape(-1)[self.gather]
-        if self.scale is not None:
-            vals *= self.scale
-        data = np.add.reduceat(vals, self.starts) if vals.size else vals
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
+    @classmethod
+    def build(cls, dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
+        """The map into CSR (``fmt = "csr"``) or CSC (``"csc"``) storage."""
+        n = dm.n_free
+        rows, coefs = dm.master[edofs], dm.coef[edofs]
+        major, minor = (rows[:, :, None], rows[:, None, :]) if fmt == "csr" else (
+            rows[:, None, :], rows[:, :, None])
+        keys = (major.astype(np.int64) * n + minor).ravel()
+        valid = rows >= 0
+        pos = np.flatnonzero((valid[:, :, None] & valid[:, None, :]).ravel())
+        key = keys[pos]
+        order = np.argsort(key, kind="stable")  # equal keys keep element order
+        sorted_key = key[order]
+        first = np.flatnonzero(np.concatenate([[True], sorted_key[1:] != sorted_key[:-1]]))
+        unique = sorted_key[first]
+        indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
+        entries = pos[order]
+        product = (coefs[:, :, None] * coefs[:, None, :]).ravel()[entries]
+        # row s of the scatter matrix lists, in element order, the entries summed into slot s
+        scatter = sp.csr_matrix((product, entries, np.append(first, pos.size)),
+                                shape=(unique.size, keys.size))
+        return cls((n, n), indptr, (unique % n).astype(np.int32), scatter, fmt)
 
-
-def build_scatter_map(dm: DofMap, edofs: NDArray) -> ScatterMap:
-    """Scatter map of element matrices on the full dofs ``edofs`` (ne, nd) into ``dm``'s
-    reduced system (entries on fixed dofs dropped, tied dofs merged with their coefficient)."""
-    rows = dm.master[edofs]
-    ne, nd = rows.shape
-    shape3 = (ne, nd, nd)
-    R = np.broadcast_to(rows[:, :, None], shape3).reshape(-1)
-    C = np.broadcast_to(rows[:, None, :], shape3).reshape(-1)
-    kept = np.flatnonzero((R >= 0) & (C >= 0))
-    n = dm.n_free
-    key = R[kept].astype(np.int64) * n + C[kept]
-    order = np.argsort(key, kind="stable")  # stable: duplicates keep element order
-    gather = kept[order]
-    key = key[order]
-    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if key.size else key[:0]
-    unique = key[starts]
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(unique // n, minlength=n), out=indptr[1:])
-    index_dtype = np.int32 if max(n, unique.size) < 2**31 - 1 else np.int64
-    coefs = dm.coef[edofs]
-    scale = None
-    if np.any(coefs != 1.0):
-        scale = (coefs[:, :, None] * coefs[:, None, :]).reshape(-1)[gather]
-    return ScatterMap(gather, scale, starts, indptr.astype(index_dtype),
-                      (unique % n).astype(index_dtype), shape3)
+    def assemble(self, Ke: NDArray) -> sp.csr_matrix | sp.csc_matrix:
+        data = self.scatter @ Ke.reshape(-1)
+        kind = sp.csr_matrix if self.fmt == "csr" else sp.csc_matrix
+        return kind((data, self.indices.copy(), self.indptr.copy()), shape=self.shape)
 
 
-def scatter_map(dm: DofMap, element_dofs: NDArray | None = None) -> ScatterMap:
-    """The cached :class:`ScatterMap` of ``element_dofs`` (default: the mesh elements) on
-    ``dm``; built on first use, so every later assembly on the same map (stiffness, mass and
-    damping of a transient, repeated solves) reuses it."""
-    edofs = dm.element_dofs if element_dofs is None else element_dofs
-    hit = dm._scatter.get(id(edofs))
-    if hit is not None and hit[0] is edofs:  # the stored array pins the id: no reuse by another
-        return hit[1]
-    smap = build_scatter_map(dm, edofs)
-    dm._scatter[id(edofs)] = (edofs, smap)
-    return smap
+def _map_key(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    h.update(fmt.encode())
+    for a in (np.asarray([dm.n_free, *edofs.shape]), dm.master, dm.coef, edofs):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.digest()
 
 
-def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
-                    ) -> sp.csr_matrix:
-    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix (CSR, sorted
-    indices, duplicates summed) through the dofmap's cached :func:`scatter_map`.
+def scatter_map(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
+    """The scatter map of this (dof map, element dofs) topology, cached per process.
+
+    Every assembly goes through a map, so the summation order and hence every bit of the
+    result never depends on what was assembled before (the process pool and a threaded dask
+    cluster give identical rows). Building one costs about 53 ms on the default forearm, 15 ms
+    more than one COO -> CSR; each later assembly of the topology costs 9 ms."""
+    key = _map_key(dm, edofs, fmt)
+    with _lock:
+        if key in _maps:
+            _maps.move_to_end(key)
+            return _maps[key]
+        built = _maps[key] = ScatterMap.build(dm, edofs, fmt)
+        while len(_maps) > MAP_CACHE_SIZE:
+            _maps.popitem(last=False)
+        return built
+
+
+def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None,
+                    fmt: str = "csr") -> sp.csr_matrix | sp.csc_matrix:
+    """Scatter element matrices (ne, nd, nd) into the reduced sparse matrix.
 
     ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
-    pass their own full dof indices."""
-    smap = scatter_map(dm, element_dofs)
-    if Ke.shape != smap.shape:
-        raise ValueError(f"element matrices of shape {Ke.shape} do not match the element dofs "
-                         f"{smap.shape[:2]}: expected {smap.shape}")
-    return smap.assemble(Ke, dm.n_free)
-
-
-def assemble_matrix_coo(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
-                        ) -> sp.csr_matrix:
-    """Reference assembly through COO -> CSR (duplicate summing per call); the scatter map of
-    :func:`assemble_matrix` must agree with it to round-off."""
+    pass their own full dof indices. ``fmt`` "csr" or "csc" (what a factorisation takes, saving
+    the conversion). Goes through the topology's cached :class:`ScatterMap`."""
+    if fmt not in ("csr", "csc"):
+        raise ValueError(f"fmt = {fmt!r}: allowed 'csr' or 'csc'")
     edofs = dm.element_dofs if element_dofs is None else element_dofs
-    rows = dm.master[edofs]
-    coefs = dm.coef[edofs]
-    R = np.broadcast_to(rows[:, :, None], Ke.shape)
-    C = np.broadcast_to(rows[:, None, :], Ke.shape)
-    keep = (R >= 0) & (C >= 0)
-    vals = (Ke * (coefs[:, :, None] * coefs[:, None, :]))[keep]
-    A = sp.coo_matrix((vals, (R[keep], C[keep])), shape=(dm.n_free, dm.n_free))
-    return A.tocsr()
+    return scatter_map(dm, edofs, fmt).assemble(Ke)
 
 
 def assemble_vector(dm: DofMap, f_full: NDArray) -> NDArray:

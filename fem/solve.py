@@ -7,6 +7,7 @@ solve forms the dynamic element matrices K* - omega^2 M (+ i omega C) and assemb
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -14,7 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from . import elements
+from . import columns, elements, linalg
 from .assembly import DofMap, assemble_matrix, assemble_vector, build_dofmap, prescribed_load
 from .domain import Domain
 
@@ -41,7 +42,8 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
     """K* - omega^2 M + i omega C per element: stiffness with hysteretic moduli E (1 + i eta),
     mass when omega > 0, the PML stretch and the damping layer when the domain has them.
 
-    Elements outside the PML are formed in real arithmetic; complex factors enter only where an
+    Elements are formed column by column (:mod:`fem.columns`), except those in a PML in z;
+    elements outside the PML are formed in real arithmetic, complex factors enter only where an
     effect needs them.
     """
     mesh = domain.mesh
@@ -54,19 +56,28 @@ def dynamic_element_matrices(domain: Domain, mode: int, omega: float, log: Opera
     damped = domain.damping is not None and omega > 0
     is_complex = hysteretic or damped or bool(in_pml.any())
     nd = mesh.elements.shape[1] * elements.dofs_per_node(mode)
-    Z = np.empty((mesh.n_elements, nd, nd), dtype=complex if is_complex else float)
-    for idx, st in ((np.flatnonzero(~in_pml), None), (np.flatnonzero(in_pml), stretch)):
-        if idx.size == 0:
-            continue
-        g = elements.gauss_data(mesh, st, subset=idx)
-        Ze = elements.stiffness(g, mode, mu[idx], kappa[idx], volumetric)
-        if hysteretic:  # nu is real, so E (1 + i eta) scales mu and kappa alike
-            Ze = Ze * (1.0 + 1j * eta[idx])[:, None, None]
+    mu_star = mu * (1.0 + 1j * eta) if hysteretic else mu  # nu is real: E (1 + i eta) scales
+    kappa_star = kappa * (1.0 + 1j * eta) if hysteretic else kappa  # mu and kappa alike
+    by_column = columns.column_path(mesh, stretch)
+    idx = np.flatnonzero(by_column)
+    coef = np.column_stack([mu_star[idx], kappa_star[idx]]
+                           + ([-omega**2 * density[idx]] if omega > 0 else []))
+    Zc = columns.column_matrices(mesh, idx, stretch, mode, coef, volumetric)
+    if idx.size == mesh.n_elements and (Zc.dtype == complex or not is_complex):
+        Z = Zc
+    else:
+        Z = np.empty((mesh.n_elements, nd, nd), dtype=complex if is_complex else float)
+        Z[idx] = Zc
+    idx = np.flatnonzero(~by_column)  # elements in a PML in z: element by element
+    if idx.size:
+        g = elements.gauss_data(mesh, stretch, subset=idx)
+        Ze = elements.stiffness(g, mode, mu_star[idx], kappa_star[idx], volumetric)
         if omega > 0:
             Ze = Ze - omega**2 * elements.mass(g, mode, density[idx])
-        if damped:
-            Ze = Ze + 1j * omega * damping_layer_matrices(domain, g, mode, density[idx])
         Z[idx] = Ze
+    if damped:
+        g = elements.gauss_data(mesh)
+        Z += 1j * omega * damping_layer_matrices(domain, g, mode, density)
     log.add("stiffness", mode)
     if hysteretic:
         log.add("hysteretic damping", mode)
@@ -121,9 +132,11 @@ def condense(Ze: NDArray, inner: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     return Ze[:, outer[:, None], outer[None, :]] + np.matmul(Zbc, recover), outer, recover
 
 
+@linalg.one_blas_thread()
 def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0,
                log: OperatorLog | None = None, volumetric: str = "bbar",
-               prescribed=(), extra=()) -> ModeSolution:
+               prescribed=(), extra=(), stages: dict[str, float] | None = None
+               ) -> ModeSolution:
     """Static (omega = 0) or harmonic solve of one mode with one sparse LU factorisation.
 
     Args:
@@ -132,11 +145,15 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         prescribed: (nodes, component, values) Dirichlet data, e.g. exact fields on a boundary.
         extra: (name, element dofs (k, m), matrices (k, m, m)) operators beyond the continuum,
             such as pogo pin springs, on dofs that are not element-interior.
+        stages: if given, the wall time (s) of each stage is added under its name (the
+            benchmark's stage table, bench/bench_solver.py).
     """
     log = log if log is not None else OperatorLog()
+    t = time.perf_counter()
     mesh = domain.mesh
     stretch = domain.stretch if omega > 0 else None
     Ze = dynamic_element_matrices(domain, mode, omega, log, volumetric, stretch)
+    t = _lap(stages, "element matrices", t)
     inner = interior_dofs(mode, mesh.order)
     fixed = domain.fixed()
     if inner.size:
@@ -144,81 +161,57 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         fixed += [(centres, c) for c in range(elements.dofs_per_node(mode))]
     dm = build_dofmap(mesh, mode, fixed, prescribed, domain.ties)
     element_dofs = dm.element_dofs
+    t = _lap(stages, "dof map", t)
     if inner.size:
         Ze, outer, recover = condense(Ze, inner)
         dm = replace(dm, element_dofs=element_dofs[:, outer])
-    A = assemble_matrix(dm, Ze)
+    t = _lap(stages, "static condensation", t)
+    A = assemble_matrix(dm, Ze, fmt="csc")  # SuperLU's storage: no conversion
     for name, edofs, Ke in extra:
-        A = A + assemble_matrix(dm, Ke, edofs)
+        A = A + assemble_matrix(dm, Ke, edofs, fmt="csc")
         log.add(name, mode)
     rhs = assemble_vector(dm, load_full) + prescribed_load(dm, Ze)
-    u = dm.expand(checked_solve(A, rhs))
+    _lap(stages, "assembly", t)
+    x = checked_solve(A, rhs, stages)
+    t = time.perf_counter()
+    u = dm.expand(x)
     if inner.size:
         u = u.astype(np.result_type(u, recover))
         u[element_dofs[:, inner]] = np.einsum("ecb,eb->ec", recover, u[dm.element_dofs])
+    _lap(stages, "recovery", t)
     # unknowns of the discretisation: the global system plus the condensed interior dofs
     return ModeSolution(mode, dm, u, dm.n_free + mesh.n_elements * inner.size)
+
+
+def _lap(stages: dict[str, float] | None, name: str, t0: float) -> float:
+    """Add the time since ``t0`` (s) to ``stages[name]`` (when recording); the time now."""
+    now = time.perf_counter()
+    if stages is not None:
+        stages[name] = stages.get(name, 0.0) + now - t0
+    return now
 
 
 #: Largest relative residual ||A x - b|| / ||b|| a direct solve may leave.
 RESIDUAL_TOLERANCE = 1e-6
 
 
-def checked_solve(A: sp.spmatrix, b: NDArray) -> NDArray:
+def checked_solve(A: sp.spmatrix, b: NDArray,
+                  stages: dict[str, float] | None = None) -> NDArray:
     """Solve A x = b with one factorisation; raise if the answer is not finite or does not
     satisfy the system (a singular operator: an unrestrained body, a mechanism)."""
-    x = factorize(A).solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    t = time.perf_counter()
+    lu = linalg.factorize(A)
+    t = _lap(stages, "factor", t)
+    x = lu.solve(b.astype(np.result_type(A.dtype, b.dtype)))
+    t = _lap(stages, "solve", t)
     norm_b = np.linalg.norm(b)
     residual = np.linalg.norm(A @ x - b) / norm_b if norm_b > 0 else np.linalg.norm(x)
     if not np.all(np.isfinite(x)) or residual > RESIDUAL_TOLERANCE:
         raise FloatingPointError(
             f"the system is singular or ill-posed (relative residual {residual:.1e}): a part of "
             "the model is not restrained; check boundary conditions and effects")
+    _lap(stages, "residual", t)
     return x
-
-
-class UmfpackLU:
-    """UMFPACK (SuiteSparse, through cvxopt) LU of a sparse matrix, real or complex.
-
-    Its BLAS-3 frontal kernels factor the 2D Fourier-mode systems here about 5x faster than
-    SuperLU; SuperLU remains the fallback and the choice for many cheap re-solves.
-    """
-
-    def __init__(self, A: sp.spmatrix) -> None:
-        import cvxopt
-        from cvxopt import umfpack
-
-        A = sp.csc_matrix(A)
-        A.sort_indices()
-        self._complex = np.iscomplexobj(A.data)
-        tc = "z" if self._complex else "d"
-        cols = np.repeat(np.arange(A.shape[1]), np.diff(A.indptr))
-        self._A = cvxopt.spmatrix(cvxopt.matrix(A.data.astype(complex if self._complex else float)),
-                                  cvxopt.matrix(A.indices.astype(int)), cvxopt.matrix(cols),
-                                  A.shape, tc)
-        self._umfpack, self._cvxopt = umfpack, cvxopt
-        self._numeric = umfpack.numeric(self._A, umfpack.symbolic(self._A))
-
-    def solve(self, b: NDArray) -> NDArray:
-        """Solve A x = b for b of shape (n,) or (n, k)."""
-        rhs = self._cvxopt.matrix(np.asarray(b, dtype=complex if self._complex else float))
-        self._umfpack.solve(self._A, self._numeric, rhs)
-        return np.array(rhs).reshape(np.shape(b))
-
-
-def factorize(A: sp.spmatrix, many_solves: bool = False):
-    """Sparse LU of A with a fill-reducing ordering, reusable across right-hand sides.
-
-    UMFPACK when cvxopt is installed and few solves follow; SuperLU in symmetric mode (the
-    operators are structurally symmetric) for many cheap re-solves, as in time stepping.
-    """
-    if not many_solves:
-        try:
-            return UmfpackLU(A)
-        except ImportError:
-            pass
-    return spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                     options={"SymmetricMode": True})
 
 
 def natural_modes(domain: Domain, mode: int, k: int = 6,

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from . import elements, motor
+from . import elements, linalg, motor
 from .assembly import assemble_matrix, assemble_vector, build_dofmap
 from .problem import Problem, drive_omega
 from .scene import LoadKind, Scene
@@ -103,6 +103,7 @@ def load_history(scene: Scene, problem: Problem):
     return history, 1
 
 
+@linalg.one_blas_thread()
 def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii: NDArray,
         log: OperatorLog, progress: Callable[[int, int], None] | None = None) -> Histories:
     """Integrate the scene's transient and sample it with ``stencil`` (nodes, weights) at the
