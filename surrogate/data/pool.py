@@ -19,16 +19,11 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
-import threadpoolctl
-
 __all__ = ["THREAD_VARS", "check_workers", "cpu_count", "make_executor", "one_blas_thread",
            "process_map"]
 
 #: Largest worker count accepted (far above any machine this runs on; catches typos).
 MAX_WORKERS = 256
-
-#: The worker's thread-pool limit, held for the life of the worker process.
-_THREAD_LIMIT: threadpoolctl.threadpool_limits | None = None
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -84,11 +79,8 @@ def _init_worker(parent_pid: int) -> None:
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
     import fem.simulation  # noqa: F401 - import the solver once per worker, not per task
 
-    # One BLAS/OpenMP thread in this worker even when the user's environment sets a count
-    # (one_blas_thread only fills unset variables) or a library ignores the variables: the
-    # pool already fills the cores with one single-threaded solve per worker.
-    global _THREAD_LIMIT
-    _THREAD_LIMIT = threadpoolctl.threadpool_limits(1)
+    # Each solve also holds its BLAS to one thread itself (fem.linalg.one_blas_thread), so a
+    # user's thread count in the environment cannot oversubscribe the pool.
 
 
 def make_executor(workers: int) -> cf.ProcessPoolExecutor:
