@@ -8,21 +8,27 @@ Backends and why (measured on the dumped default forearm matrix: mode 1, Q9 cond
 complex unknowns, 0.56 M non-zeros; one loaded 2-core machine; medians of 3 runs;
 reproduce with ``python bench/bench_solver.py --solvers``):
 
-- ``superlu`` (default, ships with scipy): SuperLU in symmetric mode, i.e. the minimum-degree
-  ordering of A + A^T (``MMD_AT_PLUS_A``) and diagonal pivots (``diag_pivot_thresh = 0``):
-  factor 241 ms + solve 13 ms, relative residual 1.7e-13. It halves the fill of SuperLU's default
-  COLAMD with partial pivoting (factor 704 ms + solve 19 ms, same residual) and beats UMFPACK
-  through cvxopt (factor 310 ms + solve 50 ms, the conversion to cvxopt included), which is why
-  cvxopt is no longer a dependency. A geometric nested-dissection ordering of the structured grid
-  was tried as well: 2.41 M factor entries against MMD's 2.43 M and no faster, so it is not used.
-  Diagonal pivoting is safe here because every matrix is symmetric with a dominant diagonal
-  block per node; :func:`fem.solve.checked_solve` still checks the residual of every solve.
-- ``pardiso`` (optional, ``pip install hapticrom[mkl]``; chosen automatically when
-  ``pypardiso`` imports): Intel MKL PARDISO for real matrices (static, transient); the issue
-  that motivated this layer measured PARDISO 7.5 ms against SuperLU 10.5 ms per transient step.
-  pypardiso handles real matrices only, so complex harmonic systems stay on SuperLU. The MKL
-  wheel is about 0.9 GB and was not installed on the machine this was written on: this path is
-  untested here.
+- ``pardiso`` (optional, ``pip install hapticrom[mkl]``, chosen automatically when the MKL
+  runtime is installed): Intel MKL PARDISO called directly (:mod:`fem.pardiso`), L D L^T of the
+  complex symmetric matrix (type 6), Cholesky of the real SPD ones (type 2). Default matrix:
+  ordering + symbolic 45 ms, numeric 80 ms, solve 10-12 ms, 1.46 M factor entries, relative
+  residual 4e-14. The symbolic part is reused when the same sparsity pattern comes back (a
+  frequency sweep, dataset samples on one mesh): factor 80-85 ms then. It is an extra because
+  the MKL wheel is about 220 MB to download (0.9 GB installed).
+- ``superlu`` (the default without MKL, ships with scipy): SuperLU in symmetric mode, i.e. the
+  minimum-degree ordering of A + A^T (``MMD_AT_PLUS_A``) and diagonal pivots
+  (``diag_pivot_thresh = 0``): factor 241-300 ms + solve 10-13 ms, 2.43 M factor entries,
+  relative residual 1.7e-13. It halves the fill of SuperLU's default COLAMD with partial
+  pivoting (factor 704 ms + solve 19 ms, same residual) and beats UMFPACK through cvxopt (factor
+  310 ms + solve 50 ms, the conversion to cvxopt included), which is why cvxopt is no longer a
+  dependency. A geometric nested-dissection ordering of the structured grid was tried as well:
+  2.41 M factor entries against MMD's 2.43 M and no faster, so it is not used. Diagonal
+  pivoting is safe here because every matrix is symmetric with a dominant diagonal block per
+  node; :func:`fem.solve.checked_solve` still checks the residual of every solve.
+
+Other wheels were measured and not used: qdldl (real L D L^T: 20 ms per right-hand side on
+the transient matrix against SuperLU's 22 ms for two), python-mumps (only a numpy-1 wheel),
+scikit-umfpack and scikit-sparse (no wheels).
 
 BLAS runs on one thread inside every solve (:func:`one_blas_thread`): SuperLU's supernodal
 kernels call BLAS on small blocks, where OpenBLAS's default thread pool only contends. On the
@@ -38,15 +44,15 @@ check of every solve guards the answer instead.
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import os
 from collections.abc import Iterator
 from typing import Protocol
 
-import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+
+from fem import pardiso
 
 __all__ = ["BACKENDS", "Factorization", "available_backends", "default_backend", "factorize",
            "one_blas_thread"]
@@ -82,39 +88,25 @@ class Factorization(Protocol):
 
 def available_backends() -> list[str]:
     """Backends that can run in this environment, fastest first."""
-    found = ["pardiso"] if importlib.util.find_spec("pypardiso") is not None else []
-    return [*found, "superlu"]
+    return ["pardiso", "superlu"] if pardiso.available() else ["superlu"]
 
 
-def default_backend(is_complex: bool) -> str:
-    """The backend :func:`factorize` uses for a real or complex matrix: ``HAPTICROM_SOLVER`` if
-    set, else PARDISO for real matrices when installed, else SuperLU."""
+def default_backend() -> str:
+    """The backend :func:`factorize` uses for real and complex matrices alike:
+    ``HAPTICROM_SOLVER`` if set, else the fastest installed (PARDISO, then SuperLU)."""
     forced = os.environ.get(ENV_VAR, "").strip().lower()
     if forced:
         _check_backend(forced, ENV_VAR)
         return forced
-    if not is_complex and "pardiso" in available_backends():
-        return "pardiso"
-    return "superlu"
+    return available_backends()[0]
 
 
 def _check_backend(name: str, field: str) -> None:
     if name not in BACKENDS:
         raise ValueError(f"{field} = {name!r}: allowed {', '.join(BACKENDS)}")
     if name == "pardiso" and "pardiso" not in available_backends():
-        raise ValueError(f"{field} = 'pardiso' needs pypardiso (pip install hapticrom[mkl])")
-
-
-class _Pardiso:
-    """MKL PARDISO through pypardiso (real matrices only)."""
-
-    def __init__(self, A: sp.spmatrix) -> None:
-        import pypardiso
-
-        self._solve = pypardiso.factorized(sp.csr_matrix(A, dtype=float))
-
-    def solve(self, b: NDArray) -> NDArray:
-        return np.asarray(self._solve(np.asarray(b, dtype=float)))
+        raise ValueError(f"{field} = 'pardiso' needs the MKL runtime "
+                         "(pip install hapticrom[mkl])")
 
 
 def superlu(A: sp.spmatrix) -> spla.SuperLU:
@@ -123,24 +115,25 @@ def superlu(A: sp.spmatrix) -> spla.SuperLU:
                      options={"SymmetricMode": True})
 
 
-def factorize(A: sp.spmatrix, backend: str | None = None) -> Factorization:
+def factorize(A: sp.spmatrix, backend: str | None = None,
+              positive_definite: bool | None = None) -> Factorization:
     """Factor a symmetric (real or complex) sparse matrix once for any number of solves.
 
     Args:
         A: square sparse matrix, symmetric (A = A^T).
         backend: one of :data:`BACKENDS`, or None for :func:`default_backend`.
+        positive_definite: True when A is known to be real symmetric positive definite (a
+            transient's effective matrix, a mass matrix): PARDISO then runs Cholesky only and
+            a non-positive pivot raises; None lets it try Cholesky and fall back to L D L^T.
+            SuperLU ignores it.
 
     Raises:
-        ValueError: unknown or unavailable backend. A complex matrix asked of PARDISO goes to
-            SuperLU (pypardiso is real only).
-        RuntimeError: SuperLU found the matrix exactly singular.
+        ValueError: unknown or unavailable backend.
+        RuntimeError: the matrix is singular (SuperLU), or PARDISO reported an error
+            (:class:`fem.pardiso.PardisoError`).
     """
-    is_complex = np.iscomplexobj(A.data) if sp.issparse(A) else np.iscomplexobj(A)
-    name = default_backend(is_complex) if backend is None else backend
+    name = default_backend() if backend is None else backend
     _check_backend(name, "backend")
     if name == "pardiso":
-        if is_complex:
-            # pypardiso wraps real PARDISO only; fall back rather than fail a forced run
-            return superlu(A)
-        return _Pardiso(A)
+        return pardiso.PardisoFactorization(A, positive_definite)
     return superlu(A)

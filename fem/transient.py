@@ -267,16 +267,15 @@ def _initial_acceleration(
 
 
 def _factorize(matrix: sp.spmatrix, name: str) -> linalg.Factorization:
-    """Sparse LU of ``matrix``, with a clear error when it is singular.
+    """Factorisation of ``matrix``, with a clear error when it is singular.
 
     The effective matrix M + gamma dt C + beta dt^2 K (and M) is symmetric positive definite:
-    :func:`fem.linalg.factorize` picks the fastest SPD-capable backend installed (SuperLU in
-    symmetric mode by default: 7 ms a step on the 25k-dof unit against 15 ms with COLAMD and
-    partial pivoting).
+    :func:`fem.linalg.factorize` picks the fastest backend installed (PARDISO's Cholesky with
+    the MKL extra, else SuperLU in symmetric mode).
     """
     try:
-        return linalg.factorize(matrix)
-    except RuntimeError as exc:  # SuperLU reports exact singularity as RuntimeError
+        return linalg.factorize(matrix, positive_definite=True)
+    except RuntimeError as exc:  # SuperLU (exact singularity) and PARDISO (pivot <= 0) raise it
         raise ValueError(
             f"{name} is singular and cannot be factorised ({exc}); check boundary "
             "conditions and that every DOF carries mass"

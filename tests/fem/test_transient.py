@@ -221,10 +221,16 @@ def test_batched_columns_equal_separate_runs_exactly() -> None:
     second = solve_transient(mass, stiff, f2[:, None], lambda t: history(t)[:, 1:], 1e-3, 300,
                              **kw)
     assert both.u.shape == (301, 3, 2)
-    assert np.array_equal(both.u[:, :, 0], first.u[:, :, 0])
-    assert np.array_equal(both.u[:, :, 1], second.u[:, :, 0])
-    assert np.array_equal(both.u_final[:, 1], second.u_final[:, 0])
-    assert np.array_equal(both.v_final[:, 0], first.v_final[:, 0])
+    # SuperLU solves the columns one by one: bit for bit; PARDISO's block solve of several
+    # right-hand sides orders the sums differently (measured 4e-16 relative on the transient
+    # example), so the runs agree to round-off
+    scale = np.abs(both.u).max()
+    np.testing.assert_allclose(both.u[:, :, 0], first.u[:, :, 0], rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(both.u[:, :, 1], second.u[:, :, 0], rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(both.u_final[:, 1], second.u_final[:, 0], rtol=0,
+                               atol=1e-12 * np.abs(both.u_final).max())
+    np.testing.assert_allclose(both.v_final[:, 0], first.v_final[:, 0], rtol=0,
+                               atol=1e-12 * np.abs(both.v_final).max())
 
 
 # ---------------------------------------------------------------- extreme step sizes
