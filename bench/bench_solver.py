@@ -87,9 +87,13 @@ def _child(kind: str, reps: int, steps: int) -> dict:
     raise ValueError(f"unknown child kind {kind!r}")
 
 
-def _in_tree(tree: Path, kind: str, reps: int, steps: int = 0) -> dict:
-    """Run :func:`_child` in a fresh interpreter whose imports resolve to ``tree``."""
+def _in_tree(tree: Path, kind: str, reps: int, steps: int = 0, solver: str = "") -> dict:
+    """Run :func:`_child` in a fresh interpreter whose imports resolve to ``tree``;
+    ``solver`` forces a backend of this tree (``HAPTICROM_SOLVER``), "" = its default."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
+    env.pop("HAPTICROM_SOLVER", None)
+    if solver:
+        env["HAPTICROM_SOLVER"] = solver
     code = (f"import json, sys; sys.path.insert(0, {str(ROOT / 'bench')!r}); "
             f"import bench_solver as b; "
             f"print(json.dumps(b._child({kind!r}, {reps}, {steps})))")
@@ -127,19 +131,35 @@ def stage_table(repeat: int) -> None:
 
 
 # ---------------------------------------------------------------- 2. side by side
+def _variants(baseline: Path | None) -> list[tuple[str, Path, str]]:
+    """(label, tree, forced solver) of every run: this tree with its default backend, with
+    SuperLU alone (what a machine without the mkl extra runs) when MKL is installed, and the
+    baseline checkout."""
+    from fem import linalg
+
+    runs = [("this tree", ROOT, "")]
+    if linalg.default_backend() != "superlu":
+        runs.append(("superlu", ROOT, "superlu"))
+    return runs + ([("baseline", baseline, "")] if baseline else [])
+
+
 def side_by_side(baseline: Path | None, repeat: int) -> None:
-    print("## 2. default forearm harmonic solve (fem.simulate), fresh processes, alternating")
+    from fem import linalg
+
+    print("## 2. default forearm harmonic solve (fem.simulate), fresh processes, alternating; "
+          f"this tree's backend: {linalg.default_backend()}")
     if baseline is None:
         print("  baseline skipped: pass --baseline PATH (a checkout of the earlier revision)")
-        return
-    rounds = max(1, repeat // 3)
-    new, old = [], []
-    for _ in range(rounds):
-        old += _in_tree(baseline, "harmonic", 3)["times"]
-        new += _in_tree(ROOT, "harmonic", 3)["times"]
-    m_new, m_old = statistics.median(new), statistics.median(old)
-    print(f"  baseline {baseline}: {_ms(m_old)} ms   this tree: {_ms(m_new)} ms   "
-          f"speed-up {m_old / m_new:.2f}x  ({len(new)} runs each)")
+    runs = _variants(baseline)
+    times: dict[str, list[float]] = {label: [] for label, _, _ in runs}
+    for _ in range(max(1, repeat // 3)):
+        for label, tree, solver in runs:
+            times[label] += _in_tree(tree, "harmonic", 3, solver=solver)["times"]
+    med = {label: statistics.median(t) for label, t in times.items()}
+    for label, _, _ in runs:
+        ratio = f"  {med['baseline'] / med[label]:.2f}x faster than baseline" if (
+            baseline and label != "baseline") else ""
+        print(f"  {label:<9} {_ms(med[label])} ms ({len(times[label])} runs){ratio}")
 
 
 # ---------------------------------------------------------------- 3. scikit-fem peer
@@ -260,20 +280,22 @@ def generation(n: int, workers: list[int]) -> None:
 # ---------------------------------------------------------------- 5. transient
 def transient(baseline: Path | None, repeat: int, steps: int) -> None:
     print(f"## 5. transient per-step cost (examples/unit-transient.toml, {steps} steps)")
-    trees = [("this tree", ROOT)] + ([("baseline", baseline)] if baseline else [])
     per = {}
-    for label, tree in trees:
-        r = _in_tree(tree, "transient", repeat, steps)
+    for label, tree, solver in _variants(baseline):
+        r = _in_tree(tree, "transient", repeat, steps, solver=solver)
         one, many = statistics.median(r["one"]), statistics.median(r["many"])
         per[label] = (many - one) / (steps - 1)
         print(f"  {label:<9} {r['dofs']} unknowns: factor + 1 step {_ms(one)} ms, "
               f"per step {1e3 * per[label]:.2f} ms")
     if baseline is None:
         print("  baseline skipped: pass --baseline PATH")
-    else:
-        print(f"  per-step speed-up {per['baseline'] / per['this tree']:.2f}x")
+        return
+    for label in per:
+        if label != "baseline":
+            print(f"  per-step speed-up, {label}: {per['baseline'] / per[label]:.2f}x")
 
 
+# ---------------------------------------------------------------- main
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--baseline", type=Path, default=None,

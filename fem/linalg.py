@@ -52,10 +52,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from fem import pardiso
+from fem import mkl, pardiso
 
-__all__ = ["BACKENDS", "Factorization", "available_backends", "default_backend", "factorize",
-           "one_blas_thread"]
+__all__ = ["BACKENDS", "Factorization", "Product", "available_backends", "default_backend",
+           "factorize", "one_blas_thread", "product"]
 
 #: Backend names accepted by :func:`factorize` (and the ``HAPTICROM_SOLVER`` variable).
 BACKENDS = ("superlu", "pardiso")
@@ -137,3 +137,30 @@ def factorize(A: sp.spmatrix, backend: str | None = None,
     if name == "pardiso":
         return pardiso.PardisoFactorization(A, positive_definite)
     return superlu(A)
+
+
+class Product(Protocol):
+    """A fixed sparse matrix ready to multiply: ``accumulate(X, out, alpha)`` does
+    out += alpha A X in place (X, out C-contiguous float64, (n,) or (n, k))."""
+
+    def accumulate(self, X: NDArray, out: NDArray, alpha: float = 1.0) -> NDArray: ...
+
+
+class _ScipyProduct:
+    """scipy's CSR product behind the :class:`Product` interface."""
+
+    def __init__(self, A: sp.spmatrix) -> None:
+        self._A = sp.csr_matrix(A)
+
+    def accumulate(self, X: NDArray, out: NDArray, alpha: float = 1.0) -> NDArray:
+        out += alpha * (self._A @ X) if alpha != 1.0 else self._A @ X
+        return out
+
+
+def product(A: sp.spmatrix, columns: int = 1) -> Product:
+    """A real sparse matrix prepared for many products with ``columns``-column blocks: MKL's
+    analysed product (:class:`fem.mkl.SparseProduct`, 3x faster than scipy's on the transient
+    stiffness) when the PARDISO backend is in use, else scipy's."""
+    if default_backend() == "pardiso":
+        return mkl.SparseProduct(A, columns)
+    return _ScipyProduct(A)

