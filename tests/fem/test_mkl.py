@@ -54,3 +54,5 @@ def test_linalg_product_follows_the_backend(monkeypatch):
     if mkl.available():
         monkeypatch.setenv(linalg.ENV_VAR, "pardiso")
         assert isinstance(linalg.product(A, 2), mkl.SparseProduct)
+        monkeypatch.delenv(linalg.ENV_VAR)
+        assert isinstance(linalg.product(A, 2), mkl.SparseProduct)
