@@ -4,27 +4,33 @@ The systems are symmetric: complex symmetric (A = A^T, not Hermitian) for a harm
 hysteretic damping or a PML, real symmetric positive definite for a static solve and for the
 effective matrix of a transient. Every backend here factors once and re-solves cheaply.
 
-Backends and why (measured on the dumped default forearm matrix: mode 1, Q9 condensed, 12,298
-complex unknowns, 0.56 M non-zeros; one loaded 2-core machine; medians of 3 runs;
-reproduce with ``python bench/bench_solver.py --solvers``):
+Backends and why (medians on the real matrices, one thread, a shared 2-core machine; reproduce
+with ``python bench/bench_backends.py``): the default forearm harmonic matrix (mode 1, Q9
+condensed, 12,298 complex unknowns, 0.56 M non-zeros) and the transient example's effective
+matrix (25,324 real unknowns, 1.17 M non-zeros, two right-hand sides every step).
 
-- ``pardiso`` (optional, ``pip install hapticrom[mkl]``, chosen automatically when the MKL
-  runtime is installed): Intel MKL PARDISO called directly (:mod:`fem.pardiso`), L D L^T of the
-  complex symmetric matrix (type 6), Cholesky of the real SPD ones (type 2). Default matrix:
-  ordering + symbolic 45 ms, numeric 80 ms, solve 10-12 ms, 1.46 M factor entries, relative
-  residual 4e-14. The symbolic part is reused when the same sparsity pattern comes back (a
-  frequency sweep, dataset samples on one mesh): factor 80-85 ms then. It is an extra because
-  the MKL wheel is about 220 MB to download (0.9 GB installed).
-- ``superlu`` (the default without MKL, ships with scipy): SuperLU in symmetric mode, i.e. the
-  minimum-degree ordering of A + A^T (``MMD_AT_PLUS_A``) and diagonal pivots
-  (``diag_pivot_thresh = 0``): factor 241-300 ms + solve 10-13 ms, 2.43 M factor entries,
-  relative residual 1.7e-13. It halves the fill of SuperLU's default COLAMD with partial
-  pivoting (factor 704 ms + solve 19 ms, same residual) and beats UMFPACK through cvxopt (factor
-  310 ms + solve 50 ms, the conversion to cvxopt included), which is why cvxopt is no longer a
-  dependency. A geometric nested-dissection ordering of the structured grid was tried as well:
-  2.41 M factor entries against MMD's 2.43 M and no faster, so it is not used. Diagonal
-  pivoting is safe here because every matrix is symmetric with a dominant diagonal block per
-  node; :func:`fem.solve.checked_solve` still checks the residual of every solve.
+- ``pardiso`` (the general default when MKL is installed: ``pip install hapticrom[mkl]``, which
+  the development environment includes): Intel MKL PARDISO called directly
+  (:mod:`fem.pardiso`), L D L^T of the complex symmetric matrix, Cholesky of real SPD ones,
+  L D L^T of real indefinite ones. Harmonic: first factorisation of a pattern 145-180 ms
+  (ordering and analysis included), later ones of the same pattern 80-115 ms (the analysis is
+  reused: a frequency sweep, dataset samples on one mesh), solve 10-14 ms, 1.34 M factor
+  entries, relative residual 4e-14. It is an extra because the MKL wheel is about 220 MB to
+  download (0.9 GB installed).
+- ``superlu`` (the general default without MKL, ships with scipy): SuperLU in symmetric mode,
+  i.e. the minimum-degree ordering of A + A^T (``MMD_AT_PLUS_A``) and diagonal pivots
+  (``diag_pivot_thresh = 0``): harmonic factor 280-365 ms + solve 13 ms, 2.43 M factor
+  entries. It halves the fill of SuperLU's default COLAMD with partial pivoting (factor 704 ms)
+  and beats UMFPACK through cvxopt (factor 310 ms + solve 50 ms, the conversion to cvxopt
+  included), which is why cvxopt is no longer a dependency. A geometric nested-dissection
+  ordering of the structured grid gave 2.41 M entries and no speed-up. Diagonal pivoting is
+  safe here because every matrix is symmetric with a dominant diagonal block per node;
+  :func:`fem.solve.checked_solve` still checks the residual of every solve.
+- ``cholmod`` (a dependency: cholespy's 14 MB wheel carries SuiteSparse CHOLMOD): supernodal
+  Cholesky, only for matrices the caller declares positive definite (the transient's), where
+  the per-step solve is what counts: two right-hand sides 12.6 ms against PARDISO 15.8 ms and
+  SuperLU 18 ms (its factorisation, 560 ms on the reference BLAS the wheel carries, happens
+  once per run).
 
 Other wheels were measured and not used: qdldl (real L D L^T: 20 ms per right-hand side on
 the transient matrix against SuperLU's 22 ms for two), python-mumps (only a numpy-1 wheel),
