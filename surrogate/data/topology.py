@@ -112,7 +112,9 @@ def default_cap(size: int, n_items: int, workers: int) -> int:
 
 
 def _split(group: list[T], cap: int) -> list[list[T]]:
-    """``group`` cut into the fewest near-equal consecutive pieces of at most ``cap``."""
+    """``group`` cut into the fewest near-equal consecutive pieces of at most ``cap``, the
+    longer ones first (so sorting by length keeps a group's pieces in order)."""
     count = math.ceil(len(group) / cap)
-    bounds = [round(i * len(group) / count) for i in range(count + 1)]
+    short, longer = divmod(len(group), count)
+    bounds = [0, *itertools.accumulate([short + 1] * longer + [short] * (count - longer))]
     return [group[a:b] for a, b in itertools.pairwise(bounds)]
