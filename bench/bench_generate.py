@@ -3,17 +3,24 @@
     python bench/bench_generate.py                       # default space, default mesh
     python bench/bench_generate.py --n 64 --coarse       # coarse mesh: runner overhead regime
     python bench/bench_generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
+    python bench/bench_generate.py --n 256 --compare --repeats 2   # topology grouping on/off
 
 Each run generates ``--n`` samples of the space into a fresh temporary dataset through the
 public ``surrogate.data.generate.generate`` (process pool, Parquet parts, manifest: the real path).
 Reported per worker count: wall time of the run (worker start-up included), samples per
 minute, the mean solver time per sample (``wall_s`` column) and the parallel efficiency
 rate(w) / (w * rate(1)). No assertions: numbers go into the README.
+
+``--compare`` runs every worker count with the dispatch grouped by mesh topology
+(``surrogate.data.generate.GROUP_BY_TOPOLOGY``) and in plan order, alternately, ``--repeats``
+times, and counts in the workers how many scatter maps each sample built (0: every map came
+from the per-process cache): the medians and the grouped/plan-order speed-up are printed.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import sys
@@ -25,6 +32,98 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 COARSE_MESH = {"near_size_mm": 1.0, "far_size_mm": 4.0, "order": 1}
+#: Directory the workers of a --compare run append their per-sample map build counts to.
+COUNTS_ENV = "HAPTICROM_BENCH_MAP_COUNTS"
+_builds = [0]
+
+
+def _count_builds() -> None:
+    """In a worker: count fem.assembly.ScatterMap builds (once per process)."""
+    import fem.assembly as fa
+
+    if getattr(fa.ScatterMap.build, "_bench_counting", False):
+        return
+    real = fa.ScatterMap.build
+
+    def build(cls, *args, **kwargs):
+        _builds[0] += 1
+        return real(*args, **kwargs)
+
+    build._bench_counting = True
+    fa.ScatterMap.build = classmethod(build)
+
+
+def counting_run_chunk(payload: str) -> str:
+    """``surrogate.data.worker.run_chunk`` one sample at a time, appending the number of scatter
+    maps each sample built to a file of this worker process (spawned workers import this
+    script as their ``__main__``)."""
+    from surrogate.data.worker import run_chunk
+
+    _count_builds()
+    rows, solver = [], None
+    with open(Path(os.environ[COUNTS_ENV]) / f"{os.getpid()}.txt", "a") as log:
+        for scene in json.loads(payload):
+            before = _builds[0]
+            reply = json.loads(run_chunk(json.dumps([scene])))
+            solver = reply["solver"]
+            rows += reply["rows"]
+            log.write(f"{_builds[0] - before}\n")
+    return json.dumps({"solver": solver, "rows": rows})
+
+
+def _run(space, n: int, workers: int, grouped: bool) -> dict:
+    """One generate run into a fresh dataset: wall [s], rate, mean solve time, map counts."""
+    import pandas as pd
+
+    import surrogate.data.backends as backends
+    import surrogate.data.generate as gen
+
+    with tempfile.TemporaryDirectory() as tmp:
+        counts = Path(tmp) / "counts"
+        counts.mkdir()
+        os.environ[COUNTS_ENV] = str(counts)
+        saved = gen.GROUP_BY_TOPOLOGY, backends.run_chunk
+        gen.GROUP_BY_TOPOLOGY, backends.run_chunk = grouped, counting_run_chunk
+        try:
+            t0 = time.perf_counter()
+            rep = gen.generate(space, n, Path(tmp) / "ds", workers=workers, progress=False)
+            wall = time.perf_counter() - t0
+        finally:
+            gen.GROUP_BY_TOPOLOGY, backends.run_chunk = saved
+        df = pd.read_parquet(Path(tmp) / "ds")
+        built = [int(x) for f in counts.iterdir() for x in f.read_text().split()]
+    return {"wall": wall, "rate": 60.0 * n / wall, "solve": float(df["wall_s"].mean()),
+            "failed": rep.new_failed, "maps": sum(built),
+            "reused": sum(b == 0 for b in built), "counted": len(built)}
+
+
+def compare(space, n: int, workers: list[int], repeats: int) -> None:
+    """Grouped vs plan-order dispatch, alternating, medians per worker count."""
+    import numpy as np
+
+    print(f"{'workers':>7} {'dispatch':>10} {'wall_s':>8} {'samples/min':>12} "
+          f"{'solve_s/sample':>15} {'maps built':>10} {'all reused':>10}")
+    runs: dict[tuple[int, bool], list[dict]] = {}
+    for r in range(repeats):
+        for w in workers:
+            for grouped in ((True, False) if r % 2 else (False, True)):
+                res = _run(space, n, w, grouped)
+                runs.setdefault((w, grouped), []).append(res)
+                print(f"{w:>7} {'topology' if grouped else 'plan':>10} {res['wall']:>8.2f} "
+                      f"{res['rate']:>12.1f} {res['solve']:>15.3f} {res['maps']:>10} "
+                      f"{res['reused']:>7}/{res['counted']:<3}", flush=True)
+    print("# medians")
+    for w in workers:
+        med = {g: {k: float(np.median([x[k] for x in runs[(w, g)]])) for k in runs[(w, g)][0]}
+               for g in (False, True)}
+        for g in (False, True):
+            m = med[g]
+            print(f"{w:>7} {'topology' if g else 'plan':>10} {m['wall']:>8.2f} "
+                  f"{m['rate']:>12.1f} {m['solve']:>15.3f} {m['maps']:>10.0f} "
+                  f"{m['reused']:>7.0f}/{n:<3}")
+        print(f"# {w} worker(s): grouped/plan-order wall ratio "
+              f"{med[True]['wall'] / med[False]['wall']:.3f}, mean solve time ratio "
+              f"{med[True]['solve'] / med[False]['solve']:.3f}")
 
 
 def _space(path: Path, coarse: bool):
@@ -47,6 +146,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     p.add_argument("--coarse", action="store_true",
                    help="coarse mesh (1/4 mm, linear, 30 mm radius): measures the runner")
+    p.add_argument("--compare", action="store_true",
+                   help="topology-grouped vs plan-order dispatch, alternating, with map counts")
+    p.add_argument("--repeats", type=int, default=2, help="runs per variant with --compare")
     args = p.parse_args(argv)
 
     import pandas as pd
@@ -65,6 +167,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}, "
           f"python {platform.python_version()}")
     print(f"# planning (resolve + validate + hash {args.n} scenes): {plan_s * 1e3:.0f} ms")
+    if args.compare:
+        compare(space, args.n, args.workers, args.repeats)
+        return 0
     print(f"{'workers':>7} {'samples':>7} {'wall_s':>8} {'samples/min':>12} "
           f"{'solve_s/sample':>15} {'dofs':>7} {'failed':>6} {'efficiency':>10}")
     base_rate = None
