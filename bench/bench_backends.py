@@ -84,10 +84,12 @@ def _median_ms(fn, repeat: int) -> float:
     return 1e3 * statistics.median(times)
 
 
-def _entries(fac) -> int:
+def _entries(fac) -> str:
     if hasattr(fac, "factor_nnz"):
-        return fac.factor_nnz
-    return int(fac.L.nnz + fac.U.nnz)
+        return str(fac.factor_nnz)
+    if hasattr(fac, "L"):
+        return str(fac.L.nnz + fac.U.nnz)
+    return "n/a"  # cholespy does not expose its factor
 
 
 def backends(name: str, A: sp.spmatrix, b: np.ndarray, repeat: int, spd: bool | None) -> None:
@@ -96,6 +98,8 @@ def backends(name: str, A: sp.spmatrix, b: np.ndarray, repeat: int, spd: bool | 
     print(f"  {'backend':<8} {'cold factor':>12} {'warm factor':>12} {'solve':>9} "
           f"{'entries':>10} {'residual':>9}")
     for backend in linalg.available_backends():
+        if backend == "cholmod" and spd is not True:
+            continue  # real SPD matrices only
         def cold(backend=backend):
             if pardiso.available():
                 pardiso.clear_pool()

@@ -275,7 +275,7 @@ def _factorize(matrix: sp.spmatrix, name: str) -> linalg.Factorization:
 
     The effective matrix M + gamma dt C + beta dt^2 K (and M) is symmetric positive definite:
     :func:`fem.linalg.factorize` picks the fastest backend installed (PARDISO's Cholesky with
-    the MKL extra, else SuperLU in symmetric mode).
+    the MKL extra, else CHOLMOD, else SuperLU in symmetric mode).
     """
     try:
         return linalg.factorize(matrix, positive_definite=True)
