@@ -27,12 +27,11 @@ matrix (25,324 real unknowns, 1.17 M non-zeros, two right-hand sides every step)
   safe here because every matrix is symmetric with a dominant diagonal block per node;
   :func:`fem.solve.checked_solve` still checks the residual of every solve.
 - ``cholmod`` (a dependency: cholespy's 14 MB wheel carries SuiteSparse CHOLMOD): supernodal
-  Cholesky, for matrices the caller declares positive definite (the transient's) when MKL is
-  not installed. There the per-step solve is what counts (3,000 steps in the transient
-  example): two right-hand sides 8.3 ms against SuperLU's 9.4-14.5 ms on the quiet machine,
-  12.6 against 18 ms under load; its factorisation (490 ms on the reference BLAS the wheel
-  carries) happens once per run. With MKL, PARDISO's Cholesky solves as fast (8.7 ms quiet,
-  per-step times of the whole loop equal within noise) and factors 4x faster, so it is used.
+  Cholesky, for matrices the caller declares positive definite (the transient's), where the
+  per-step solve is what counts (3,000 steps in the transient example): two right-hand sides
+  7.0 ms against PARDISO's 8.7 ms on the quiet machine (alternating in one process), 12.6
+  against 15.8 ms under load, and against SuperLU's 9.4-14.5 ms. Its factorisation (490 ms on
+  the reference BLAS the wheel carries, PARDISO 130 ms) happens once per run.
 
 Other wheels were measured and not used: qdldl (real L D L^T: 20 ms per right-hand side on
 the transient matrix against SuperLU's 22 ms for two), python-mumps (only a numpy-1 wheel),
@@ -104,14 +103,15 @@ def available_backends() -> list[str]:
 
 
 def default_backend(positive_definite: bool | None = None) -> str:
-    """The backend :func:`factorize` uses: ``HAPTICROM_SOLVER`` if set; else PARDISO when
-    installed; else, for a matrix known to be SPD (the transient's), CHOLMOD; else SuperLU."""
+    """The backend :func:`factorize` uses: ``HAPTICROM_SOLVER`` if set; else CHOLMOD for a
+    matrix known to be SPD (the transient's: its solves are the fastest measured) when
+    installed; else the fastest general backend installed (PARDISO, then SuperLU)."""
     forced = os.environ.get(ENV_VAR, "").strip().lower()
     if forced:
         _check_backend(forced, ENV_VAR)
         return forced
     found = available_backends()
-    if positive_definite is True and found[0] == "superlu" and "cholmod" in found:
+    if positive_definite is True and "cholmod" in found:
         return "cholmod"
     return found[0]
 

@@ -274,8 +274,8 @@ def _factorize(matrix: sp.spmatrix, name: str) -> linalg.Factorization:
     """Factorisation of ``matrix``, with a clear error when it is singular.
 
     The effective matrix M + gamma dt C + beta dt^2 K (and M) is symmetric positive definite:
-    :func:`fem.linalg.factorize` picks the fastest backend installed (PARDISO's Cholesky with
-    the MKL extra, else CHOLMOD, else SuperLU in symmetric mode).
+    :func:`fem.linalg.factorize` picks the fastest backend installed for it (CHOLMOD, else
+    PARDISO's Cholesky, else SuperLU in symmetric mode).
     """
     try:
         return linalg.factorize(matrix, positive_definite=True)

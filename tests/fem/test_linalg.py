@@ -33,9 +33,7 @@ def test_backend_choice_and_errors(monkeypatch):
     general = [b for b in linalg.available_backends() if b != "cholmod"]
     assert linalg.default_backend() == general[0]
     assert general[-1] == "superlu"
-    spd = general[0]
-    if general[0] == "superlu" and "cholmod" in linalg.available_backends():
-        spd = "cholmod"
+    spd = "cholmod" if "cholmod" in linalg.available_backends() else general[0]
     assert linalg.default_backend(positive_definite=True) == spd
     with pytest.raises(ValueError, match="backend = 'umfpack': allowed superlu, pardiso, cholmod"):
         linalg.factorize(_laplacian(3), backend="umfpack")
@@ -51,7 +49,7 @@ def test_backend_choice_and_errors(monkeypatch):
 def test_absent_backends_are_clear_errors(monkeypatch):
     monkeypatch.delenv(linalg.ENV_VAR, raising=False)
     monkeypatch.setattr(linalg.pardiso, "available", lambda: False)
-    if "cholmod" in linalg.available_backends():  # without MKL, SPD matrices go to CHOLMOD
+    if "cholmod" in linalg.available_backends():  # SPD matrices go to CHOLMOD
         assert linalg.default_backend(positive_definite=True) == "cholmod"
         assert isinstance(linalg.factorize(_laplacian(3), positive_definite=True),
                           linalg._Cholmod)
