@@ -45,7 +45,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_fem.py
 	$(BIN)/python bench/bench_effects.py
 	$(BIN)/python bench/bench_absorber.py
-	$(BIN)/python bench/bench_solver.py
+	$(BIN)/python bench/bench_backends.py
 	$(BIN)/python bench/bench_generate.py
 	$(BIN)/python bench/bench_surrogate.py
 	$(BIN)/python bench/bench_plan.py
