@@ -149,68 +149,97 @@ _lock = threading.Lock()  # dask runs solves on threads of one process
 class ScatterMap:
     """Where every element-matrix entry lands in the CSR data of the reduced matrix.
 
-    ``scatter`` (nnz, ne * nd * nd) holds the constraint coefficient products (+-1) of the
-    kept entries, so assembly is one sparse product ``scatter @ Ke.ravel()``: no COO sort and
-    no duplicate summing per solve (default forearm: 9 ms against 35-39 ms for COO -> CSR;
-    bench/bench_solver.py). Duplicates are summed in element order.
+    ``scatter`` holds one sparse matrix per block of element matrices (the continuum's, then
+    e.g. the pogo pin springs'), (nnz, ne * nd * nd) each, with the constraint coefficient
+    products (+-1) of the kept entries, so assembly is one sparse product per block: no COO
+    sort and no duplicate summing per solve (default forearm: 9-12 ms against 35-39 ms for
+    COO -> CSR; bench/bench_solver.py). Duplicates are summed in element order within a block,
+    then the blocks are added. The pattern is the union of the blocks' structural patterns and
+    keeps explicit zeros, so it depends on the topology only, never on the values (a sum of
+    separately assembled matrices would drop entries that happen to be zero, and the sparse
+    factorisation's analysis could then not be reused across samples).
     """
 
     shape: tuple[int, int]
     indptr: NDArray
     indices: NDArray
-    scatter: sp.csr_matrix
+    scatter: tuple[sp.csr_matrix, ...]
     fmt: str = "csr"
 
     @classmethod
-    def build(cls, dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
-        """The map into CSR (``fmt = "csr"``) or CSC (``"csc"``) storage."""
+    def build(cls, dm: DofMap, edofs: NDArray | Sequence[NDArray],
+              fmt: str = "csr") -> ScatterMap:
+        """The map into CSR (``fmt = "csr"``) or CSC (``"csc"``) storage of one block of
+        element dofs (ne, nd) or of several blocks."""
+        blocks = [edofs] if isinstance(edofs, np.ndarray) else list(edofs)
         n = dm.n_free
-        rows, coefs = dm.master[edofs], dm.coef[edofs]
-        major, minor = (rows[:, :, None], rows[:, None, :]) if fmt == "csr" else (
-            rows[:, None, :], rows[:, :, None])
-        keys = (major.astype(np.int64) * n + minor).ravel()
-        valid = rows >= 0
-        pos = np.flatnonzero((valid[:, :, None] & valid[:, None, :]).ravel())
-        key = keys[pos]
-        order = np.argsort(key, kind="stable")  # equal keys keep element order
+        keys, positions, products, sizes = [], [], [], []
+        offset = 0
+        for block in blocks:
+            rows, coefs = dm.master[block], dm.coef[block]
+            major, minor = (rows[:, :, None], rows[:, None, :]) if fmt == "csr" else (
+                rows[:, None, :], rows[:, :, None])
+            valid = rows >= 0
+            pos = np.flatnonzero((valid[:, :, None] & valid[:, None, :]).ravel())
+            keys.append((major.astype(np.int64) * n + minor).ravel()[pos])
+            products.append((coefs[:, :, None] * coefs[:, None, :]).ravel()[pos])
+            positions.append(pos + offset)
+            sizes.append(rows.shape[0] * rows.shape[1] ** 2)
+            offset += sizes[-1]
+        key = np.concatenate(keys)
+        order = np.argsort(key, kind="stable")  # equal keys keep block and element order
         sorted_key = key[order]
         first = np.flatnonzero(np.concatenate([[True], sorted_key[1:] != sorted_key[:-1]]))
         unique = sorted_key[first]
         indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
-        entries = pos[order]
-        product = (coefs[:, :, None] * coefs[:, None, :]).ravel()[entries]
         # row s of the scatter matrix lists, in element order, the entries summed into slot s
-        scatter = sp.csr_matrix((product, entries, np.append(first, pos.size)),
-                                shape=(unique.size, keys.size))
-        return cls((n, n), indptr, (unique % n).astype(np.int32), scatter, fmt)
+        scatter = sp.csr_matrix((np.concatenate(products)[order], np.concatenate(positions)[order],
+                                 np.append(first, key.size)), shape=(unique.size, offset))
+        bounds = np.cumsum([0, *sizes])
+        parts = (scatter,) if len(blocks) == 1 else tuple(
+            sp.csr_matrix(scatter[:, bounds[i]:bounds[i + 1]]) for i in range(len(blocks)))
+        return cls((n, n), indptr, (unique % n).astype(np.int32), parts, fmt)
 
-    def assemble(self, Ke: NDArray) -> sp.csr_matrix | sp.csc_matrix:
-        data = self.scatter @ Ke.reshape(-1)
+    def assemble(self, Ke: NDArray | Sequence[NDArray]) -> sp.csr_matrix | sp.csc_matrix:
+        """The reduced matrix of element matrices (ne, nd, nd), one array per block."""
+        mats = [Ke] if isinstance(Ke, np.ndarray) else list(Ke)
+        if len(mats) != len(self.scatter):
+            raise ValueError(f"{len(mats)} blocks of element matrices for a map of "
+                             f"{len(self.scatter)}")
+        data = self.scatter[0] @ mats[0].reshape(-1)
+        for part, mat in zip(self.scatter[1:], mats[1:], strict=True):
+            data = data + part @ mat.reshape(-1)
         kind = sp.csr_matrix if self.fmt == "csr" else sp.csc_matrix
         return kind((data, self.indices.copy(), self.indptr.copy()), shape=self.shape)
 
 
-def _map_key(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> bytes:
+def _map_key(dm: DofMap, blocks: Sequence[NDArray], fmt: str = "csr") -> bytes:
     h = hashlib.blake2b(digest_size=16)
     h.update(fmt.encode())
-    for a in (np.asarray([dm.n_free, *edofs.shape]), dm.master, dm.coef, edofs):
+    h.update(np.asarray([dm.n_free, len(blocks)]).tobytes())
+    for a in (dm.master, dm.coef):
         h.update(np.ascontiguousarray(a).tobytes())
+    for block in blocks:
+        h.update(np.asarray(block.shape).tobytes())
+        h.update(np.ascontiguousarray(block).tobytes())
     return h.digest()
 
 
-def scatter_map(dm: DofMap, edofs: NDArray, fmt: str = "csr") -> ScatterMap:
-    """The scatter map of this (dof map, element dofs) topology, cached per process.
+def scatter_map(dm: DofMap, edofs: NDArray | Sequence[NDArray], fmt: str = "csr") -> ScatterMap:
+    """The scatter map of this (dof map, element dofs) topology, one block or several, cached
+    per process.
 
     Every assembly goes through a map, so the summation order and hence every bit of the
     result never depends on what was assembled before (the process pool and a threaded dask
-    cluster give identical rows). Building one costs about 53 ms on the default forearm, 15 ms
-    more than one COO -> CSR; each later assembly of the topology costs 9 ms."""
-    key = _map_key(dm, edofs, fmt)
+    cluster give identical rows). Building one costs about 50 ms on the default forearm, 15 ms
+    more than one COO -> CSR; each later assembly of the topology costs 9-12 ms."""
+    blocks = [edofs] if isinstance(edofs, np.ndarray) else list(edofs)
+    key = _map_key(dm, blocks, fmt)
     with _lock:
         if key in _maps:
             _maps.move_to_end(key)
             return _maps[key]
-        built = _maps[key] = ScatterMap.build(dm, edofs, fmt)
+        built = _maps[key] = ScatterMap.build(dm, blocks, fmt)
         while len(_maps) > MAP_CACHE_SIZE:
             _maps.popitem(last=False)
         return built
@@ -223,10 +252,18 @@ def assemble_matrix(dm: DofMap, Ke: NDArray, element_dofs: NDArray | None = None
     ``element_dofs`` (ne, nd) defaults to the mesh elements; other element kinds (springs)
     pass their own full dof indices. ``fmt`` "csr" or "csc" (what a factorisation takes, saving
     the conversion). Goes through the topology's cached :class:`ScatterMap`."""
+    edofs = dm.element_dofs if element_dofs is None else element_dofs
+    return assemble_blocks(dm, [(edofs, Ke)], fmt)
+
+
+def assemble_blocks(dm: DofMap, blocks: Sequence[tuple[NDArray, NDArray]],
+                    fmt: str = "csr") -> sp.csr_matrix | sp.csc_matrix:
+    """The sum of several blocks of element matrices, each (element dofs (k, m), matrices
+    (k, m, m)), on one pattern that keeps explicit zeros (see :class:`ScatterMap`)."""
     if fmt not in ("csr", "csc"):
         raise ValueError(f"fmt = {fmt!r}: allowed 'csr' or 'csc'")
-    edofs = dm.element_dofs if element_dofs is None else element_dofs
-    return scatter_map(dm, edofs, fmt).assemble(Ke)
+    smap = scatter_map(dm, [edofs for edofs, _ in blocks], fmt)
+    return smap.assemble([Ke for _, Ke in blocks])
 
 
 def assemble_vector(dm: DofMap, f_full: NDArray) -> NDArray:

@@ -16,7 +16,14 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from . import columns, elements, linalg
-from .assembly import DofMap, assemble_matrix, assemble_vector, build_dofmap, prescribed_load
+from .assembly import (
+    DofMap,
+    assemble_blocks,
+    assemble_matrix,
+    assemble_vector,
+    build_dofmap,
+    prescribed_load,
+)
 from .domain import Domain
 
 
@@ -200,9 +207,10 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         Ze, outer, recover = condense(Ze, inner)
         dm = replace(dm, element_dofs=element_dofs[:, outer])
     t = _lap(stages, "static condensation", t)
-    A = assemble_matrix(dm, Ze, fmt="csc")  # SuperLU's storage: no conversion
-    for name, edofs, Ke in extra:
-        A = A + assemble_matrix(dm, Ke, edofs, fmt="csc")
+    # one pattern for the continuum and the extra operators, zeros kept: it depends on the
+    # topology only, so the factorisation's analysis is reused across samples (fem.pardiso)
+    A = assemble_blocks(dm, [(dm.element_dofs, Ze)] + [(e, K) for _, e, K in extra], "csc")
+    for name, _, _ in extra:
         log.add(name, mode)
     rhs = assemble_vector(dm, load_full) + prescribed_load(dm, Ze)
     _lap(stages, "assembly", t)

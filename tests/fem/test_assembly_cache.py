@@ -74,3 +74,33 @@ def test_unknown_format_is_refused():
     nd = dm.element_dofs.shape[1]
     with pytest.raises(ValueError, match="fmt = 'coo': allowed 'csr' or 'csc'"):
         assemble_matrix(dm, np.zeros((dm.element_dofs.shape[0], nd, nd)), fmt="coo")
+
+
+def test_blocks_sum_on_a_pattern_that_keeps_zeros():
+    """The continuum plus a spring block: the values equal the separate sum, and the pattern
+    depends on the topology only (a spring of zero stiffness or element entries that happen to
+    be zero leave it unchanged), which the factorisation's reuse of its analysis relies on."""
+    from fem.assembly import assemble_blocks
+
+    dm = _dofmap(1)
+    rng = np.random.default_rng(7)
+    nd = dm.element_dofs.shape[1]
+    Ke = rng.normal(size=(dm.element_dofs.shape[0], nd, nd)) * (1 + 0.5j)
+    # a spring between the z dofs of two nodes that share no element (a new pattern entry)
+    first = next(d for d in dm.element_dofs[0] if dm.master[d] >= 0)
+    last = next(d for d in dm.element_dofs[-1][::-1] if dm.master[d] >= 0)
+    springs = np.array([[first, last]])
+    Ks = np.array([[[2.0, -2.0], [-2.0, 2.0]]])
+    A = assemble_blocks(dm, [(dm.element_dofs, Ke), (springs, Ks)], "csc")
+    separate = assemble_matrix(dm, Ke, fmt="csc") + assemble_matrix(dm, Ks, springs, fmt="csc")
+    assert np.abs((A - separate).toarray()).max() <= 1e-14 * np.abs(A.data).max()
+    zeroed = Ke.copy()
+    zeroed[0] = 0.0  # an element whose matrix is exactly zero
+    B = assemble_blocks(dm, [(dm.element_dofs, zeroed), (springs, 0.0 * Ks)], "csc")
+    assert np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
+    assert (B.data == 0).any()  # the zeros are stored, not dropped
+    dropped = assemble_matrix(dm, zeroed, fmt="csc") + assemble_matrix(dm, 0.0 * Ks, springs,
+                                                                        fmt="csc")
+    assert dropped.nnz < B.nnz  # what a plain sum of matrices would have done
+    with pytest.raises(ValueError, match="1 blocks of element matrices for a map of 2"):
+        scatter_map(dm, [dm.element_dofs, springs], "csc").assemble([Ke])
