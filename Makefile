@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_absorber.py
 	$(BIN)/python bench/bench_backends.py
 	$(BIN)/python bench/bench_generate.py
+	$(BIN)/python bench/bench_mesh_plan.py
 	$(BIN)/python bench/bench_surrogate.py
 	$(BIN)/python bench/bench_plan.py
 

@@ -4,6 +4,7 @@
     python bench/bench_generate.py --n 64 --coarse       # coarse mesh: runner overhead regime
     python bench/bench_generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
     python bench/bench_generate.py --n 256 --compare --repeats 2   # topology grouping on/off
+    python bench/bench_generate.py --n 256 --mesh-topology per_design   # one mesh per design
 
 Each run generates ``--n`` samples of the space into a fresh temporary dataset through the
 public ``surrogate.data.generate.generate`` (process pool, Parquet parts, manifest: the real path).
@@ -126,15 +127,18 @@ def compare(space, n: int, workers: list[int], repeats: int) -> None:
               f"{med[True]['solve'] / med[False]['solve']:.3f}")
 
 
-def _space(path: Path, coarse: bool):
+def _space(path: Path, coarse: bool, mesh_topology: str | None):
     from surrogate.data.space import load_space, space_from_dict
 
     space = load_space(path)
-    if not coarse:
+    if not coarse and mesh_topology is None:
         return space
     d = space.to_dict()
-    d["base"].setdefault("mesh", {}).update(COARSE_MESH)
-    d["base"].setdefault("tissue", {})["radius_mm"] = 30.0
+    if coarse:
+        d["base"].setdefault("mesh", {}).update(COARSE_MESH)
+        d["base"].setdefault("tissue", {})["radius_mm"] = 30.0
+    if mesh_topology is not None:
+        d["space"]["mesh_topology"] = mesh_topology
     return space_from_dict(d)
 
 
@@ -149,19 +153,21 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--compare", action="store_true",
                    help="topology-grouped vs plan-order dispatch, alternating, with map counts")
     p.add_argument("--repeats", type=int, default=2, help="runs per variant with --compare")
+    p.add_argument("--mesh-topology", choices=("per_sample", "per_design"), default=None,
+                   help="override the space's mesh_topology (surrogate.data.mesh_plan)")
     args = p.parse_args(argv)
 
     import pandas as pd
 
     from surrogate.data.generate import generate, plan_samples
 
-    space = _space(args.space, args.coarse)
+    space = _space(args.space, args.coarse, args.mesh_topology)
     t0 = time.perf_counter()
     plan_samples(space, args.n)
     plan_s = time.perf_counter() - t0
     mesh = space.defaults.get("mesh", {})
     print(f"# hapticrom generate benchmark: space {space.name!r} ({args.space.name}), "
-          f"{args.n} samples per run")
+          f"{args.n} samples per run, mesh_topology {space.mesh_topology}")
     print(f"# mesh near {mesh.get('near_size_mm')} mm / far {mesh.get('far_size_mm')} mm / "
           f"order {mesh.get('order')}{' (coarse)' if args.coarse else ''}; "
           f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}, "

@@ -138,6 +138,14 @@ def estimate_cost(scene: Scene) -> CostEstimate:
         segments, under, rows = _unit_cells(scene, spec)
         cells_r += slack * segments  # its radii are cell lines through the whole grid
         nodes += o * slack * segments * (o * cells_z + 1) + (o * under + 1) * o * rows
+    if spec.cells_r is not None or spec.cells_z is not None:
+        # fixed counts (at least what the sizes need, else the build refuses them): the full
+        # grid of the cells along each axis bounds the mesh (void cells only remove nodes)
+        rows_above = _unit_cells(scene, spec)[2] if scene.unit is not None else 0.0
+        grid_r = sum(spec.cells_r) if spec.cells_r is not None else cells_r
+        grid_z = sum(spec.cells_z) if spec.cells_z is not None else cells_z + rows_above
+        nodes = max(nodes, (o * grid_r + 1) * (o * grid_z + 1))
+        cells_r, cells_z = max(cells_r, grid_r), max(cells_z, grid_z)
     dofs_per_node = 2 if scene.load.fourier_mode == 0 else 3
     n = nodes * dofs_per_node
     memory = _LU_BYTES_PER_UNKNOWN_LOG2 * n * math.log2(max(n, 2.0)) / 1e9

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from . import absorbers
 from .assembly import UR, UT, UZ
 from .materials import Material
-from .mesh import Mesh, build_mesh, graded_lines, growing_size
+from .mesh import Mesh, build_mesh, fit_cells, graded_lines, growing_size, segment_cells
 
 SIDES = ("absorbing", "fixed", "free")
 # assembly name -> Material attribute (the names the element routines use)
@@ -41,13 +41,25 @@ class Block:
 @dataclass(frozen=True)
 class MeshSpec:
     """Element sizes (m) and order: ``near_size`` within ``near_radius`` of the axis (and near the
-    surface), growing to ``far_size``."""
+    surface), growing to ``far_size``. ``cells_r`` / ``cells_z``, when given, fix the number of
+    cells in every segment along r / z (see :attr:`Domain.cells_needed`): the topology is then
+    the same for every body with the same segments, and the sizes place the nodes."""
 
     near_size: float = 0.5e-3
     near_radius: float = 8e-3
     far_size: float = 2e-3
     order: int = 2
     growth: float = 0.2
+    cells_r: tuple[int, ...] | None = None
+    cells_z: tuple[int, ...] | None = None
+
+
+class CellPlanError(ValueError):
+    """Fixed cell counts that do not fit the body: ``axis`` is "r" or "z"."""
+
+    def __init__(self, axis: str, message: str) -> None:
+        super().__init__(message)
+        self.axis = axis
 
 
 @dataclass(frozen=True)
@@ -67,6 +79,12 @@ class Domain:
         ties: (follower nodes, leader nodes, component) pairs with equal displacement.
         effects: physical effects the discretisation includes, for the summary.
         skipped: effects left out because the scene does not need them.
+        cells_needed: cells per segment along r and along z that the size rules give (the
+            mesh has these, or the counts of ``MeshSpec.cells_r`` / ``cells_z``). Segments
+            run between the axis, the load and unit radii, ``near_radius``, the tissue radius
+            and the end of the side absorber (r); and between the top of the unit, its part
+            boundaries, the skin, the layer interfaces, the tissue base and the end of the
+            base absorber (z); breakpoints that coincide count once.
     """
 
     mesh: Mesh
@@ -81,6 +99,7 @@ class Domain:
     ties: tuple[tuple[NDArray, NDArray, int], ...] = ()
     effects: tuple[str, ...] = ()
     skipped: tuple[str, ...] = ()
+    cells_needed: tuple[tuple[int, ...], tuple[int, ...]] = ((), ())
 
     def element_property(self, name: str) -> NDArray:
         """Per-element array of a material property by its assembly name: "mu" (shear modulus,
@@ -170,6 +189,7 @@ def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side
         r_lines = np.concatenate([r_lines, r_lay.lines])
     if z_lay is not None:
         z_lines = np.concatenate([z_lines, z_lay.lines])
+    z_above: list[float] = []
     if blocks:
         z_top = min(b.z0 for b in blocks)
         z_above = sorted({b.z0 for b in blocks} | {b.z1 for b in blocks if b.z1 < 0} | {z_top}
@@ -177,6 +197,13 @@ def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side
         above = graded_lines(np.array([*z_above, 0.0]), lambda x: np.full_like(x, spec.near_size),
                              min_cells)
         z_lines = np.concatenate([above[:-1], z_lines])
+    # the absorbers (extension and layer) form one segment: its count is what the wave needs
+    r_bounds = np.array([*r_pts, r_lines[-1]])
+    z_bounds = np.array([*z_above, *z_iface, z_lines[-1]])
+    needed = (tuple(segment_cells(r_lines, r_bounds).tolist()),
+              tuple(segment_cells(z_lines, z_bounds).tolist()))
+    r_lines = _fixed_cells(r_lines, r_bounds, spec.cells_r, needed[0], "r")
+    z_lines = _fixed_cells(z_lines, z_bounds, spec.cells_z, needed[1], "z")
 
     solids, cell = _paint(r_lines, z_lines, z_iface, tissue, blocks)
     mesh = build_mesh(r_lines, z_lines, cell, spec.order)
@@ -199,11 +226,30 @@ def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side
     if side != "absorbing" and base != "absorbing":
         skipped.append("absorbing boundary")
     domain = Domain(mesh, solids, radius, depth, side, base, stretch, damping, (), (),
-                    tuple(effects), tuple(skipped))
+                    tuple(effects), tuple(skipped), needed)
     held = [domain.boundary_nodes(w) for w, kind in (("side", side), ("base", base))
             if kind in ("absorbing", "fixed")]
     nodes = np.unique(np.concatenate(held)) if held else np.empty(0, dtype=int)
     return replace(domain, constraints=tuple((nodes, c) for c in (UR, UZ, UT)))
+
+
+def _fixed_cells(lines: NDArray, bounds: NDArray, cells: Sequence[int] | None,
+                 needed: tuple[int, ...], axis: str) -> NDArray:
+    """``lines`` refitted to the fixed counts ``cells`` (None: as they are), which must match
+    the segments and give each at least the cells the size rules need."""
+    if cells is None:
+        return lines
+    if len(cells) != len(needed):
+        raise CellPlanError(axis, f"{len(cells)} cell counts along {axis} for a body with "
+                            f"{len(needed)} segments along {axis} (it needs at least "
+                            f"{list(needed)})")
+    short = [i for i, (n, m) in enumerate(zip(cells, needed, strict=True)) if n < m]
+    if short:
+        i = short[0]
+        raise CellPlanError(axis, f"segment {i} along {axis} gets {cells[i]} cells where the "
+                            f"element sizes need at least {needed[i]} (all segments need at "
+                            f"least {list(needed)})")
+    return fit_cells(lines, bounds, np.asarray(cells))
 
 
 def _paint(r_lines: NDArray, z_lines: NDArray, z_iface: NDArray, tissue: list[Material],

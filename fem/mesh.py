@@ -163,3 +163,54 @@ def build_mesh(r_lines: NDArray, z_lines: NDArray, cell_material: NDArray, order
         r_lines=r_lines,
         z_lines=z_lines,
     )
+
+
+def segment_cells(lines: NDArray, bounds: NDArray) -> NDArray:
+    """Cells between consecutive ``bounds`` (sorted coordinates, m, each a cell line of
+    ``lines``; breakpoints closer than the mesher's sliver tolerance count once)."""
+    lines = np.asarray(lines, dtype=float)
+    return np.diff(_bound_indices(lines, bounds))
+
+
+def fit_cells(lines: NDArray, bounds: NDArray, cells: NDArray) -> NDArray:
+    """``lines`` with exactly ``cells[i]`` cells between bounds i and i + 1.
+
+    A segment keeps its own lines when its count is already ``cells[i]``; otherwise its lines
+    are placed at equal steps of its cell index (the piecewise-linear map from index to
+    position through the given lines), which keeps the grading of the given lines and, with
+    more cells than given, never makes a cell larger than the largest given cell it overlaps.
+    So a mesh
+    topology fixed by ``cells`` moves its nodes smoothly with the breakpoints and the size
+    rules, and equals the size rules' own mesh where it has the same counts.
+
+    Args:
+        lines: increasing cell lines (m) holding every bound.
+        bounds: the segment ends (m), sorted.
+        cells: cells per segment, at least 1 each.
+    """
+    lines = np.asarray(lines, dtype=float)
+    at = _bound_indices(lines, bounds)
+    cells = np.asarray(cells, dtype=int)
+    if cells.shape != (at.size - 1,) or cells.min(initial=1) < 1:
+        raise ValueError(f"need {at.size - 1} cell counts >= 1, got {cells.tolist()}")
+    out = [lines[:1]]
+    for (a, b), n in zip(itertools.pairwise(at), cells, strict=True):
+        seg = lines[a:b + 1]
+        if n == b - a:
+            out.append(seg[1:])
+            continue
+        fitted = np.interp(np.arange(1, n + 1) * (b - a) / n, np.arange(b - a + 1), seg)
+        fitted[-1] = seg[-1]
+        out.append(fitted)
+    return np.concatenate(out)
+
+
+def _bound_indices(lines: NDArray, bounds: NDArray) -> NDArray:
+    """Index of the line at each distinct bound (ValueError if a bound is not a line)."""
+    bounds = np.unique(np.asarray(bounds, dtype=float))
+    tol = 1e-9 * max(1.0, float(np.abs(lines).max()))
+    bounds = bounds[np.concatenate([[True], np.diff(bounds) > tol])]
+    at = np.clip(np.searchsorted(lines, bounds - tol), 0, lines.size - 1)
+    if not np.allclose(lines[at], bounds, rtol=0.0, atol=tol):
+        raise ValueError("every segment bound must be a cell line")
+    return at

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from . import haptic_unit, loads
 from .absorbers import ELEMENTS_PER_WAVELENGTH
 from .assembly import UR
-from .domain import Domain, MeshSpec, layered_domain
+from .domain import CellPlanError, Domain, MeshSpec, layered_domain
 from .scene import LoadKind, Scene, SceneError, Unit
 
 
@@ -142,7 +142,8 @@ def mesh_spec(scene: Scene) -> MeshSpec:
     if m.follow_wavelength:
         h = wave_element_size(scene)
         near, far = min(near, h), min(far, h)
-    return MeshSpec(near, m.near_radius_mm * 1e-3, far, m.order)
+    return MeshSpec(near, m.near_radius_mm * 1e-3, far, m.order, cells_r=m.cells_r,
+                    cells_z=m.cells_z)
 
 
 def drive_omega(scene: Scene) -> float:
@@ -169,9 +170,12 @@ def build_problem(scene: Scene) -> Problem:
         r_breaks, blocks, z_breaks = lay.r_breaks, lay.blocks, lay.z_breaks
     elif scene.load.kind == LoadKind.PRESSURE_PATCH:
         r_breaks = [scene.load.radius_m]
-    domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side, scene.tissue.base,
-                            mesh_spec(scene), analysis, omega, r_breaks, blocks,
-                            z_breaks=z_breaks)
+    try:
+        domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
+                                scene.tissue.base, mesh_spec(scene), analysis, omega, r_breaks,
+                                blocks, z_breaks=z_breaks)
+    except CellPlanError as err:
+        raise SceneError(f"mesh.cells_{err.axis}", f"mesh.cells_{err.axis}: {err}") from None
     if lay is not None and lay.contact_ties is not None:
         domain = replace(domain, ties=(ring_contact_ties(domain, *lay.contact_ties),))
     mode = scene.load.fourier_mode

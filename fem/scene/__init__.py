@@ -14,7 +14,8 @@ commented files)::
       [unit.pogo]       count, radius_mm, stiffness_N_m, length_mm, travel_mm, tip_diameter_mm
       [unit.actuator]   force_N
     [analysis]          kind, frequency_hz, time_step_ms, duration_ms, rho_inf, voltage_schedule
-    [mesh]              near_size_mm, near_radius_mm, far_size_mm, order
+    [mesh]              near_size_mm, near_radius_mm, far_size_mm, order, follow_wavelength,
+                        cells_r, cells_z (optional fixed cells per segment)
     [output]            radii_mm, profile_step_mm, profile_length_mm, history_every
     [effects]           inertia, hysteretic_damping, encapsulation, pogo, unit_mass, rocking,
                         spin_up, preload (booleans; a missing key means "auto")

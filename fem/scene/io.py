@@ -57,6 +57,8 @@ def _plain(value: Any, kind: type) -> Any:
         return bool(value)
     if kind is tuple and isinstance(value, list | tuple):
         return [_plain(v, float) for v in value]
+    if kind is list and isinstance(value, list | tuple):
+        return [_plain(v, int) for v in value]
     if kind is Schedule and isinstance(value, list | tuple):
         return [[_plain(v, float) for v in pair] if isinstance(pair, list | tuple) else pair
                 for pair in value]
@@ -118,6 +120,8 @@ def scene_to_dict(scene: Scene) -> dict[str, dict[str, Any]]:
             table = {key: value for key, value in table.items() if value is not None}
             if not table:
                 continue
+        if name == "mesh":  # fixed cell counts only when given: TOML has no null
+            table = {key: value for key, value in table.items() if value is not None}
         out[name] = table
     out["tissue"]["layer"] = [_solid_to_dict(layer, LAYER) for layer in scene.tissue.layers]
     return out

@@ -189,13 +189,27 @@ class MeshSettings:
     smaller elements where the shortest shear wavelength of the scene at the drive frequency
     needs them (10 linear or 5 quadratic elements per wavelength, about 1 % phase error), so
     no sample of a frequency or stiffness sweep is under-resolved. Turn it off to study the
-    mesh itself (convergence runs)."""
+    mesh itself (convergence runs).
+
+    ``cells_r`` / ``cells_z`` (optional) fix the number of cells in every segment of the grid
+    along r and z (``fem.domain.Domain.cells_needed`` lists the segments), each at least what
+    the sizes need: scenes that differ only in continuous values (a layer thickness, a modulus,
+    the frequency) then share one mesh topology whose nodes move with those values, so their
+    answers vary smoothly with them. A dataset's mesh plan writes them
+    (``surrogate.data.mesh_plan``)."""
 
     near_size_mm: float = 0.5
     near_radius_mm: float = 8.0
     far_size_mm: float = 2.0
     order: int = 2
     follow_wavelength: bool = True
+    cells_r: tuple[int, ...] | None = None
+    cells_z: tuple[int, ...] | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("cells_r", "cells_z"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(int(n) for n in getattr(self, name)))
 
 
 @dataclass(frozen=True)

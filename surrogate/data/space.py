@@ -9,6 +9,7 @@ Layout (``datasets/spaces/default.toml`` is a commented example)::
     seed = 2025                      # integer >= 0
     lhs_batch = 256                  # batch size of the extendable LHS / random designs
     significant_digits = 12          # continuous values rounded to this many digits (0: not)
+    mesh_topology = "per_sample"     # per_sample | per_design  (surrogate.data.mesh_plan)
     base_scene = "scene.toml"        # optional scene file, relative to this file
 
     [base]                           # scene overrides (TOML-shaped, fem.scene schema),
@@ -65,6 +66,7 @@ import numpy as np
 from fieldspec import REQUIRED, Context, Spec, read_array, read_table, require_table
 from surrogate.data.constraints import Constraint, read_constraint
 from surrogate.data.errors import SpaceError
+from surrogate.data.mesh_plan import MESH_TOPOLOGIES
 from surrogate.data.parameters import Parameter, read_parameter
 from surrogate.data.sampling import LHS_BATCH_DEFAULT, SAMPLERS, unit_points
 from surrogate.data.scene_paths import deep_merge, format_path, parse_path, set_path, truncate_path
@@ -92,6 +94,15 @@ class Space:
     description: str = ""
     constraints: tuple[Constraint, ...] = ()
     significant_digits: int = SIGNIFICANT_DIGITS
+    mesh_topology: str = "per_sample"
+
+    @functools.cached_property
+    def mesh_plan(self) -> Any:
+        """The cells per segment of every discrete design, with ``mesh_topology =
+        "per_design"`` (:class:`surrogate.data.mesh_plan.MeshPlan`)."""
+        from surrogate.data.mesh_plan import MeshPlan
+
+        return MeshPlan(self)
 
     @functools.cached_property
     def defaults(self) -> dict[str, Any]:
@@ -175,6 +186,9 @@ class Space:
         from fem.scene import SceneError, scene_from_dict
 
         resolved = self.resolve(row)
+        if self.mesh_topology == "per_design":
+            cells_r, cells_z = self.mesh_plan.cells(row)
+            resolved.setdefault("mesh", {}).update(cells_r=list(cells_r), cells_z=list(cells_z))
         try:
             return scene_from_dict(resolved)
         except SceneError as err:
@@ -206,6 +220,8 @@ class Space:
                                 "lhs_batch": self.lhs_batch}
         if self.significant_digits:  # 0 (no rounding) is how spaces were before the key existed
             head["significant_digits"] = self.significant_digits
+        if self.mesh_topology != "per_sample":  # written only when set: older hashes hold
+            head["mesh_topology"] = self.mesh_topology
         if self.description:
             head["description"] = self.description
         d: dict[str, Any] = {"space": head, "base": copy.deepcopy(self.base),
@@ -244,6 +260,7 @@ _SPACE_HEAD = {
     "seed": Spec(int, 0, "[0, 9.2e18]"),
     "lhs_batch": Spec(int, LHS_BATCH_DEFAULT, "[1, 1048576]"),
     "significant_digits": Spec(int, SIGNIFICANT_DIGITS, "[0, 17]"),
+    "mesh_topology": Spec(str, "per_sample", choices=MESH_TOPOLOGIES),
     "base_scene": Spec(str, None),
 }
 _FILE_KEYS = ("space", "base", "parameter", "constraint")
@@ -273,7 +290,8 @@ def space_from_dict(d: Mapping[str, Any], base_dir: str | Path | None = None,
     space = Space(name=head["name"], parameters=params, base=base, sampler=head["sampler"],
                   seed=head["seed"], lhs_batch=head["lhs_batch"],
                   description=head["description"], constraints=constraints,
-                  significant_digits=head["significant_digits"])
+                  significant_digits=head["significant_digits"],
+                  mesh_topology=head["mesh_topology"])
     if check_scenes:
         check_space(space)
     return space
