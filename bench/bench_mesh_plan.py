@@ -76,7 +76,6 @@ def plan_table(planned_space) -> None:
 
 def answer_table(own, planned, n: int, grid_mm) -> None:
     from fem import scene_from_dict
-    from fem.scene import scene_to_dict
     from studies.accuracy.fe_ladder import REF_LEVEL, scene_at
     from studies.accuracy.metric import errors
     from surrogate.data.plan import plan_samples
@@ -99,7 +98,6 @@ def answer_table(own, planned, n: int, grid_mm) -> None:
               f"{t_plan:>6.2f} {e_plan:>8.2%} {e_pvo:>11.2%}", flush=True)
         for k, v in zip(cols, (d_own, t_own, e_own, d_plan, t_plan, e_plan, e_pvo), strict=True):
             cols[k].append(v)
-        assert scene_to_dict(own.scene(p.values))["mesh"].get("cells_r") is None
     med = {k: float(np.median(v)) for k, v in cols.items()}
     print(f"{'median':>5} {'':<20} {med['od']:>8.0f} {med['ot']:>6.2f} {med['oe']:>8.2%} "
           f"{med['pd']:>9.0f} {med['pt']:>6.2f} {med['pe']:>8.2%} {med['pvo']:>11.2%}")

@@ -134,6 +134,7 @@ def estimate_cost(scene: Scene) -> CostEstimate:
     cells_r, cells_z = cells_r + absorber_r, cells_z + absorber_z
     o = spec.order
     nodes = (o * cells_r + 1) * (o * cells_z + 1)
+    rows = 0.0
     if scene.unit is not None:  # the unit's parts above the skin, out to its outer radius
         segments, under, rows = _unit_cells(scene, spec)
         cells_r += slack * segments  # its radii are cell lines through the whole grid
@@ -141,9 +142,8 @@ def estimate_cost(scene: Scene) -> CostEstimate:
     if spec.cells_r is not None or spec.cells_z is not None:
         # fixed counts (at least what the sizes need, else the build refuses them): the full
         # grid of the cells along each axis bounds the mesh (void cells only remove nodes)
-        rows_above = _unit_cells(scene, spec)[2] if scene.unit is not None else 0.0
         grid_r = sum(spec.cells_r) if spec.cells_r is not None else cells_r
-        grid_z = sum(spec.cells_z) if spec.cells_z is not None else cells_z + rows_above
+        grid_z = sum(spec.cells_z) if spec.cells_z is not None else cells_z + rows
         nodes = max(nodes, (o * grid_r + 1) * (o * grid_z + 1))
         cells_r, cells_z = max(cells_r, grid_r), max(cells_z, grid_z)
     dofs_per_node = 2 if scene.load.fourier_mode == 0 else 3

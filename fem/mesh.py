@@ -30,10 +30,7 @@ def graded_lines(breaks: NDArray, size_at: callable, min_per_segment: int = 1) -
         size_at: target cell size (m) as a vectorised function of position.
         min_per_segment: minimum number of cells in every segment.
     """
-    breaks = np.unique(np.asarray(breaks, dtype=float))
-    # breakpoints reached by different float paths (3.5 + 2 x 1 mm) must not make sliver cells
-    tol = 1e-9 * max(1.0, float(np.abs(breaks).max()))
-    breaks = breaks[np.concatenate([[True], np.diff(breaks) > tol])]
+    breaks = distinct_breaks(breaks)
     lines = [breaks[:1]]
     for a, b in itertools.pairwise(breaks):
         x = np.linspace(a, b, 257)
@@ -44,6 +41,14 @@ def graded_lines(breaks: NDArray, size_at: callable, min_per_segment: int = 1) -
         lines.append(np.interp(targets, cum, x))
         lines[-1][-1] = b
     return np.concatenate(lines)
+
+
+def distinct_breaks(breaks: NDArray) -> NDArray:
+    """Sorted breakpoints (m), those closer than the sliver tolerance counted once: breakpoints
+    reached by different float paths (3.5 + 2 x 1 mm) must not make sliver cells."""
+    breaks = np.unique(np.asarray(breaks, dtype=float))
+    tol = 1e-9 * max(1.0, float(np.abs(breaks).max()))
+    return breaks[np.concatenate([[True], np.diff(breaks) > tol])]
 
 
 def growing_size(x0: float, h0: float, h1: float, growth: float = 0.2) -> callable:
@@ -207,9 +212,8 @@ def fit_cells(lines: NDArray, bounds: NDArray, cells: NDArray) -> NDArray:
 
 def _bound_indices(lines: NDArray, bounds: NDArray) -> NDArray:
     """Index of the line at each distinct bound (ValueError if a bound is not a line)."""
-    bounds = np.unique(np.asarray(bounds, dtype=float))
+    bounds = distinct_breaks(bounds)
     tol = 1e-9 * max(1.0, float(np.abs(lines).max()))
-    bounds = bounds[np.concatenate([[True], np.diff(bounds) > tol])]
     at = np.clip(np.searchsorted(lines, bounds - tol), 0, lines.size - 1)
     if not np.allclose(lines[at], bounds, rtol=0.0, atol=tol):
         raise ValueError("every segment bound must be a cell line")

@@ -60,7 +60,8 @@ class Spec:
 
     Attributes:
         kind: ``float``, ``int``, ``str``, ``bool``, ``tuple`` (a non-empty list of floats,
-            each in ``interval``) or any marker type handled by ``reader``.
+            each in ``interval``), ``list`` (the same of integers) or any marker type handled
+            by ``reader``.
         default: the value when the key is absent; :data:`REQUIRED` (must be given) or None
             (optional, no value).
         interval: allowed range in math notation, e.g. ``"[0, 0.5)"``; a bound may be the
@@ -174,10 +175,12 @@ def read_number(value: Any, kind: type, path: str, ctx: Context) -> float | int:
 
 
 def _read_list(value: Any, spec: Spec, key: str, path: str, ctx: Context) -> tuple[float, ...]:
+    item_kind, noun = (int, "whole numbers") if spec.kind is list else (float, "numbers")
     if not isinstance(value, list | tuple) or not value:
         raise ctx.error(path, f"{path} = {value!r} has the wrong type: expected a "
-                        f"non-empty list of numbers ({allowed_text(spec, key, ctx, path)})")
-    items = tuple(read_number(item, float, f"{path}[{i}]", ctx) for i, item in enumerate(value))
+                        f"non-empty list of {noun} ({allowed_text(spec, key, ctx, path)})")
+    items = tuple(read_number(item, item_kind, f"{path}[{i}]", ctx)
+                  for i, item in enumerate(value))
     for i, item in enumerate(items):
         check_interval(item, spec, key, f"{path}[{i}]", ctx)
     return items
@@ -198,7 +201,7 @@ def read_value(value: Any, spec: Spec, key: str, path: str, ctx: Context) -> Any
             raise ctx.error(path, f"{path} = {value!r} has the wrong type: expected true or "
                             f"false{auto}, got {type(value).__name__}")
         return bool(value)
-    elif spec.kind is tuple:
+    elif spec.kind is tuple or spec.kind is list:
         return _read_list(value, spec, key, path, ctx)
     else:
         value = read_number(value, spec.kind, path, ctx)

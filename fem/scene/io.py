@@ -116,12 +116,10 @@ def scene_to_dict(scene: Scene) -> dict[str, dict[str, Any]]:
                 out[name] = _unit_to_dict(obj, scene.load.kind)
             continue
         table = _table_to_dict(obj, specs)
-        if name == "effects":
+        if name in ("effects", "mesh"):  # auto effects, absent cell counts: TOML has no null
             table = {key: value for key, value in table.items() if value is not None}
             if not table:
                 continue
-        if name == "mesh":  # fixed cell counts only when given: TOML has no null
-            table = {key: value for key, value in table.items() if value is not None}
         out[name] = table
     out["tissue"]["layer"] = [_solid_to_dict(layer, LAYER) for layer in scene.tissue.layers]
     return out

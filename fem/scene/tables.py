@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from fieldspec import REQUIRED, Spec, check_interval, read_number
+from fieldspec import REQUIRED, Spec
 
 from ..materials import get_material
 from .model import (
@@ -116,17 +116,6 @@ UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", 
 
 # Table name -> (dataclass, specs). Order matters: intervals may refer to earlier values, and
 # the [unit] checks need tissue.radius_mm and load.kind.
-def read_cells(value: Any, spec: Spec, path: str, ctx: Any) -> tuple[int, ...]:
-    """A non-empty list of whole cell counts, each in ``spec.interval``."""
-    if not isinstance(value, list | tuple) or not value:
-        raise ctx.error(path, f"{path} = {value!r} has the wrong type: expected a non-empty "
-                        f"list of whole numbers in {spec.interval} (cells per mesh segment)")
-    counts = tuple(read_number(item, int, f"{path}[{i}]", ctx) for i, item in enumerate(value))
-    for i, n in enumerate(counts):
-        check_interval(n, spec, path.rsplit(".", 1)[-1], f"{path}[{i}]", ctx)
-    return counts
-
-
 _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
     "tissue": (Tissue, {
         "radius_mm": Spec(float, MODEL, "[0.001, 1e5]"),
@@ -155,8 +144,8 @@ _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
         "far_size_mm": Spec(float, MODEL, "[mesh.near_size_mm, 1000]"),
         "order": Spec(int, MODEL, choices=(1, 2)),
         "follow_wavelength": Spec(bool, MODEL),
-        "cells_r": Spec(list, None, "[1, 100000]", reader=read_cells),
-        "cells_z": Spec(list, None, "[1, 100000]", reader=read_cells),
+        "cells_r": Spec(list, None, "[1, 100000]"),  # cells per mesh segment
+        "cells_z": Spec(list, None, "[1, 100000]"),
     }),
     "output": (Output, {
         "radii_mm": Spec(tuple, MODEL, "[0, tissue.radius_mm]"),

@@ -61,14 +61,13 @@ class MeshPlan:
             self._cells[key] = self._plan(row)
         return self._cells[key]
 
-    def needed(self, row: Mapping[str, Any]) -> Cells:
-        """The cells per segment the size rules give the scene of ``row`` on its own."""
+    def _domain(self, row: Mapping[str, Any]) -> Any:
+        """The discretised body of ``row``'s scene without a plan (``fem.domain.Domain``)."""
         from fem.problem import build_problem
         from fem.scene import SceneError, scene_from_dict
 
         try:
-            scene = scene_from_dict(self.space.resolve(row))
-            return build_problem(scene).domain.cells_needed
+            return build_problem(scene_from_dict(self.space.resolve(row))).domain
         except SceneError as err:
             raise self.space._scene_error(err, row) from None
 
@@ -76,18 +75,26 @@ class MeshPlan:
         continuous = [p for p in self.space.parameters if p.type == "continuous"]
         # seen from the middle and from the two extreme corners, so that a parameter that
         # matters only where another one is extreme (a ring's density when it is the
-        # softest part) is found
+        # softest part) is found; the points these probes share are meshed once
+        domains: dict[tuple[Any, ...], Any] = {}
+
+        def domain(point: Mapping[str, Any]) -> Any:
+            key = tuple(point[p.name] for p in continuous)
+            if key not in domains:
+                domains[key] = self._domain(point)
+            return domains[key]
+
         bases = [{**row, **{p.name: _ends(p)[i] for p in continuous}} for i in range(3)]
         centre = bases[0]
-        moving = [p for p in continuous if any(self._moves_mesh(b, p) for b in bases)]
+        moving = [p for p in continuous if any(_moves_mesh(domain, b, p) for b in bases)]
         if len(moving) > MAX_MESH_PARAMETERS:
             names = ", ".join(p.name for p in moving)
             raise SpaceError("space.mesh_topology", f"space.mesh_topology = 'per_design': "
                              f"{len(moving)} continuous parameters move the mesh ({names}); "
                              f"the plan meshes every corner of their box, allowed at most "
                              f"{MAX_MESH_PARAMETERS}: use mesh_topology = 'per_sample'")
-        plans = [self.needed({**centre, **dict(zip([p.name for p in moving], corner,
-                                                   strict=True))})
+        plans = [domain({**centre, **dict(zip([p.name for p in moving], corner,
+                                              strict=True))}).cells_needed
                  for corner in itertools.product(*(_ends(p)[1:] for p in moving))]
         shapes = {(len(r), len(z)) for r, z in plans}
         if len(shapes) > 1:
@@ -99,24 +106,17 @@ class MeshPlan:
         return tuple(tuple(int(n) for n in np.max([plan[axis] for plan in plans], axis=0))
                      for axis in (0, 1))  # type: ignore[return-value]
 
-    def _moves_mesh(self, base: Mapping[str, Any], p: Parameter) -> bool:
-        """Whether moving ``p`` from its low to its high end changes the mesh lines of
-        ``base``."""
-        from fem.problem import build_problem
-        from fem.scene import scene_from_dict
-
-        meshes = []
-        for value in _ends(p)[1:]:
-            scene = scene_from_dict(self.space.resolve({**base, p.name: value}))
-            mesh = build_problem(scene).domain.mesh
-            meshes.append((mesh.r_lines, mesh.z_lines))
-        (r0, z0), (r1, z1) = meshes
-        return r0.shape != r1.shape or z0.shape != z1.shape or not (
-            np.array_equal(r0, r1) and np.array_equal(z0, z1))
-
     def _label(self, row: Mapping[str, Any]) -> str:
         return ", ".join(f"{p.name} = {row[p.name]!r}" for p in self.space.parameters
                          if p.type != "continuous")
+
+
+def _moves_mesh(domain: Any, base: Mapping[str, Any], p: Parameter) -> bool:
+    """Whether moving ``p`` from its low to its high end changes the mesh lines of ``base``
+    (``domain`` meshes a point)."""
+    low, high = (domain({**base, p.name: value}).mesh for value in _ends(p)[1:])
+    return not (np.array_equal(low.r_lines, high.r_lines)
+                and np.array_equal(low.z_lines, high.z_lines))
 
 
 def _ends(p: Parameter) -> tuple[Any, Any, Any]:

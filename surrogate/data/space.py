@@ -66,7 +66,7 @@ import numpy as np
 from fieldspec import REQUIRED, Context, Spec, read_array, read_table, require_table
 from surrogate.data.constraints import Constraint, read_constraint
 from surrogate.data.errors import SpaceError
-from surrogate.data.mesh_plan import MESH_TOPOLOGIES
+from surrogate.data.mesh_plan import MESH_TOPOLOGIES, MeshPlan
 from surrogate.data.parameters import Parameter, read_parameter
 from surrogate.data.sampling import LHS_BATCH_DEFAULT, SAMPLERS, unit_points
 from surrogate.data.scene_paths import deep_merge, format_path, parse_path, set_path, truncate_path
@@ -97,11 +97,9 @@ class Space:
     mesh_topology: str = "per_sample"
 
     @functools.cached_property
-    def mesh_plan(self) -> Any:
+    def mesh_plan(self) -> MeshPlan:
         """The cells per segment of every discrete design, with ``mesh_topology =
-        "per_design"`` (:class:`surrogate.data.mesh_plan.MeshPlan`)."""
-        from surrogate.data.mesh_plan import MeshPlan
-
+        "per_design"``."""
         return MeshPlan(self)
 
     @functools.cached_property
