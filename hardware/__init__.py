@@ -13,8 +13,9 @@ scikit-learn or pysindy (an import-linter contract).
 """
 
 from hardware.backends import DEVICE_KINDS, open_device, parse_device
-from hardware.device import Device, DeviceError
+from hardware.device import Device, DeviceError, DeviceRefused, PlaybackInterrupted
 from hardware.heartbeat import Heartbeat
+from hardware.limits import ERM_RATING, ActuatorRating, DeviceLimits, preflight, resolve_limits
 from hardware.pattern import Pattern, PatternError, Step, load_pattern, pattern_from_dict
 from hardware.safety import ExposureMeter, SafetyError, SafetyLimits
 from hardware.schedule import (
@@ -27,7 +28,9 @@ from hardware.schedule import (
     plan_from_dict,
 )
 
-__all__ = ["DEVICE_KINDS", "TIMING_KEYS", "Device", "DeviceError", "ExposureMeter", "Heartbeat",
-           "Pattern", "PatternError", "PlanFile", "PlanFileError", "SafetyError",
-           "SafetyLimits", "Schedule", "Step", "build_schedule", "load_pattern", "load_plan",
-           "open_device", "parse_device", "pattern_from_dict", "plan_from_dict"]
+__all__ = ["DEVICE_KINDS", "ERM_RATING", "TIMING_KEYS", "ActuatorRating", "Device",
+           "DeviceError", "DeviceLimits", "DeviceRefused", "ExposureMeter", "Heartbeat",
+           "Pattern", "PatternError", "PlanFile", "PlanFileError", "PlaybackInterrupted",
+           "SafetyError", "SafetyLimits", "Schedule", "Step", "build_schedule", "load_pattern",
+           "load_plan", "open_device", "parse_device", "pattern_from_dict", "plan_from_dict",
+           "preflight", "resolve_limits"]
