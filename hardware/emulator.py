@@ -81,6 +81,7 @@ class EmulatedArray:
     max_on_s: float = DEFAULT_MAX_ON_S
     max_level: float = DEFAULT_MAX_LEVEL
     start_time: float = 0.0
+    report_limits: bool = True  # False: a firmware of the shorter STATUS (no limits in it)
     levels: list[float] = field(init=False)
     events: list[Event] = field(default_factory=list)
     received: list[tuple[float, Frame | FrameError]] = field(default_factory=list)
@@ -137,9 +138,10 @@ class EmulatedArray:
             elif f.type == Msg.STOP_ALL:
                 self._stop_all(now, "stop")
             elif f.type == Msg.QUERY_STATUS:
+                limits = (self.max_level, min(round(self.max_on_s * 1e3), 65535)) \
+                    if self.report_limits else (None, None)
                 status = Status(self.flags | (ST_PLAYING if self.t0 is not None else 0),
-                                round(self.watchdog_s * 1e3), tuple(self.levels),
-                                self.max_level, min(round(self.max_on_s * 1e3), 65535))
+                                round(self.watchdog_s * 1e3), tuple(self.levels), *limits)
                 self.flags = 0
                 return encode(Msg.STATUS, f.seq, encode_status(status))
             elif f.type == Msg.SET_LEVELS:
@@ -204,13 +206,13 @@ class PtyEmulator:
 
     def __init__(self, n_channels: int, watchdog_s: float = DEFAULT_WATCHDOG_S,
                  max_on_s: float = DEFAULT_MAX_ON_S, max_level: float = DEFAULT_MAX_LEVEL,
-                 tick_s: float = 0.001) -> None:
+                 tick_s: float = 0.001, report_limits: bool = True) -> None:
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         self.port = os.ttyname(self.slave)
         self.tick_s = tick_s
         self.array = EmulatedArray(n_channels, watchdog_s, max_on_s, max_level,
-                                   start_time=time.monotonic())
+                                   start_time=time.monotonic(), report_limits=report_limits)
         self.lock = threading.Lock()
         self.decoder = Decoder()
         self.last_byte = time.monotonic()

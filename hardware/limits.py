@@ -192,7 +192,8 @@ def preflight(plan: PlanFile, schedule: Schedule, resolved: Resolved,
                           "model: re-plan", value=nominal, limit=want, owner="actuator")
     lim = resolved.limits
     od = plan.timing["overdrive_level"]
-    if od > lim.max_level + LEVEL_TOLERANCE:
+    kicks = plan.timing["overdrive_ms"] > 0 or plan.timing["brake_ms"] > 0
+    if kicks and od > lim.max_level + LEVEL_TOLERANCE:
         raise SafetyError("timing.overdrive_level", f"plan timing.overdrive_level = {od:g} "
                           f"asks beyond the level limit {resolved.describe('max_level')}: "
                           "refused before anything was sent", value=od, limit=lim.max_level,
