@@ -126,7 +126,7 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
     limit."""
     base = SafetyLimits()
     values = {f.name: getattr(base, f.name) for f in fields(SafetyLimits)}
-    owners = {name: "project default (no rated value; hardware.safety)" for name in values}
+    owners = {name: "project default, no rated value: hardware.safety" for name in values}
     owners["exposure_limit"] = "ISO 5349-1 / Directive 2002/44/EC daily action value"
     nominal = actuator.nominal_voltage_V(frequency_hz)
     if nominal > actuator.max_voltage_V:
