@@ -4,7 +4,8 @@ When the device stops a schedule early (its watchdog or on-time limit, reported 
 the link is lost, or a command is refused while playing, the host knows the last moment it saw
 the device playing normally (``played_ms`` after the start: a status poll without a stop flag).
 :func:`playback_report` splits the pattern's steps at that moment: played in full, cut short
-(with its channels), not played; ``play`` prints it and exits 1.
+(with its channels), not played in full (those after it: not played, or started in the last
+poll interval before the stop); ``play`` prints it and exits 1.
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ def playback_report(schedule: Any, played_ms: float, reason: str,
              f"  played in full: steps {_span(played)} ({len(played)} of {len(steps)})"]
     if cut is not None:
         lines.append(f"  cut short: step {cut} (channels {', '.join(map(str, cut_ch))})")
-    lines.append(f"  not played: steps {_span(dropped)} ({len(dropped)} steps"
+    lines.append(f"  not played in full: steps {_span(dropped)} ({len(dropped)} steps"
                  + (f"; channels {', '.join(map(str, dropped_ch))})" if dropped else ")"))
     return {"reason": reason, "detail": detail, "played_ms": round(float(played_ms), 1),
             "total_ms": schedule.total_ms, "steps_played": played, "step_cut": cut,

@@ -119,6 +119,33 @@ def _play(kind: str, dev: Any, args: argparse.Namespace, plan: Any, schedule: An
     return None
 
 
+def _serial(args: argparse.Namespace, plan: Any, schedule: Any, meter: Any,
+            record: Any) -> BaseException | None:
+    """Play on ``serial:PORT``: the outcome of :func:`_play`, or the link lost while stopping
+    after the pattern (a PlaybackInterrupted too: the pattern had been played)."""
+    from hardware import DeviceError, open_device
+    from hardware.device import PlaybackInterrupted
+    from hardware.playback import playback_report
+
+    outcome: BaseException | None = None
+    played = False
+    dev = open_device(args.device, plan, None, None, meter, record=record)
+    try:
+        with dev:
+            outcome = _play("serial", dev, args, plan, schedule, meter)
+            played = outcome is None
+            if played:
+                level = max(map(abs, dev.status().levels))
+                print(f"played on {args.device}; device levels now {level:g} at most")
+    except DeviceError as err:  # the link went away: while starting, stopping or closing
+        if outcome is not None:
+            return outcome  # already reported; the device's watchdog stops the array
+        when = ", after the whole pattern was played" if played else ""
+        return PlaybackInterrupted(playback_report(
+            schedule, schedule.total_ms if played else 0.0, "link", f"{err}{when}"))
+    return outcome
+
+
 def _run(args: argparse.Namespace) -> int:
     from hapticrom.documents import schema
     from hardware import (
@@ -153,17 +180,12 @@ def _run(args: argparse.Namespace) -> int:
             stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
             record = JsonLines(Path(args.out) / f"session-{stamp}.jsonl", "x")
         try:
-            with open_device(args.device, plan, None, None, meter, record=record) as dev:
-                outcome = _play(kind, dev, args, plan, schedule, meter)
-                status = None if outcome else dev.status()
+            outcome = _serial(args, plan, schedule, meter, record)
         finally:
             if record is not None:
                 record.close()
-        if outcome is None:
-            print(f"played on {args.device}; device levels now "
-                  f"{max(map(abs, status.levels)):g} at most")
-            if record is not None:
-                print(f"wrote {record.path}")
+        if outcome is None and record is not None:
+            print(f"wrote {record.path}")
     else:
         with atomic_dir(args.out) as tmp:
             with open_device(args.device, plan, tmp) as dev:
