@@ -40,7 +40,9 @@ class LogDevice(Device):
         self.path = Path(path)
         self.record = JsonLines(self.path)
         self.levels = np.zeros(n_channels)
-        self._write("open", n_channels=n_channels, limits=vars(self.limits))
+        # limits not given: the caller sets them next (set_limits, then a ``limits`` line)
+        self._write("open", n_channels=n_channels,
+                    limits=None if limits is None else vars(self.limits))
 
     def _write(self, command: str, **args: Any) -> None:
         self.record.write(command, **args)
