@@ -121,9 +121,9 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
                    actuator: ActuatorRating = ERM_RATING,
                    user: list[tuple[str, float, str]] | None = None) -> Resolved:
     """The limits for playing at ``frequency_hz``: device, then actuator (and the project's
-    defaults where no rated value exists), then ``user`` ((SafetyLimits field, value, where
-    it was given), applied in order); raises SafetyError when a user value would raise a
-    limit."""
+    defaults where no rated value exists), then ``user`` ((SafetyLimits field, value in its
+    units, where and as what it was given, e.g. ``"--watchdog-ms 300"``), applied in order);
+    raises SafetyError naming the option when a user value would raise a limit."""
     base = SafetyLimits()
     values = {f.name: getattr(base, f.name) for f in fields(SafetyLimits)}
     owners = {name: "project default, no rated value: hardware.safety" for name in values}
@@ -146,9 +146,10 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
                 values[name], owners[name] = v, "device (its STATUS)"
     for name, v, where in user or []:
         if v > values[name] * (1 + 1e-9):
-            raise SafetyError(where, f"{where} = {v:g}: a user setting can only lower a limit; "
-                              f"{name} is {values[name]:.4g} ({owners[name]})",
-                              value=v, limit=values[name], owner=owners[name])
+            raise SafetyError(where.split(" ")[0], f"{where}: a user setting can only lower a "
+                              f"limit; {name} is {values[name]:.4g} "
+                              f"({owners[name].split('; ')[0]})", value=v, limit=values[name],
+                              owner=owners[name])
         values[name], owners[name] = v, f"user: {where}"
     return Resolved(replace(base, **{k: float(v) for k, v in values.items()}), owners)
 

@@ -53,11 +53,11 @@ def _user_limits(args: argparse.Namespace) -> list[tuple[str, float, str]]:
     if args.limits:
         for key, v in load_user_limits(args.limits).items():
             name, factor = USER_KEYS[key]
-            out.append((name, v * factor, f"{args.limits}: limits.{key}"))
+            out.append((name, v * factor, f"{args.limits}: limits.{key} = {v:g}"))
     for attr, (flag, name, factor) in _FLAGS.items():
         v = getattr(args, attr)
         if v is not None:
-            out.append((name, v * factor, flag))
+            out.append((name, v * factor, f"{flag} {v:g}"))
     return out
 
 

@@ -52,13 +52,13 @@ def test_the_actuator_limit_is_max_over_nominal_voltage_and_each_owner_only_lowe
     loose = resolve_limits(100.0, DeviceLimits(max_level=8.0, max_on_s=3600.0))
     assert loose.limits.max_level == pytest.approx(4.5 / (0.4 + 100 * 2.9 / 120))
     assert loose.limits.max_on_s == 10.0
-    user = resolve_limits(100.0, user=[("max_level", 1.1, "--max-level"),
-                                       ("max_on_s", 1.0, "--max-on-ms")])
-    assert user.limits.max_level == 1.1 and user.owners["max_on_s"] == "user: --max-on-ms"
-    with pytest.raises(SafetyError, match=r"--max-level = 1\.5: a user setting can only lower"
+    user = resolve_limits(100.0, user=[("max_level", 1.1, "--max-level 1.1"),
+                                       ("max_on_s", 1.0, "--max-on-ms 1000")])
+    assert user.limits.max_level == 1.1 and user.owners["max_on_s"] == "user: --max-on-ms 1000"
+    with pytest.raises(SafetyError, match=r"--max-level 1\.5: a user setting can only lower"
                        ) as err:
         resolve_limits(100.0, DeviceLimits(max_level=1.2), user=[("max_level", 1.5,
-                                                                  "--max-level")])
+                                                                  "--max-level 1.5")])
     assert (err.value.field, err.value.limit) == ("--max-level", 1.2)
     with pytest.raises(SafetyError, match=r"above its 4\.5 V maximum") as err:
         resolve_limits(180.0)
@@ -111,7 +111,15 @@ def test_an_edited_on_time_or_duty_cannot_raise_the_limits(tmp_path, capsys):
     busy = "[[step]]\nsites = [1]\nduration_ms = 1000.0\ngap_ms = 1000.0\n" * 10
     rc, lines = play(tmp_path, line_plan(), busy, "--max-duty", "0.1")
     assert rc == 2 and refused(lines)["limit"] == 0.1
-    assert "user: --max-duty" in capsys.readouterr().err
+    assert "user: --max-duty 0.1" in capsys.readouterr().err
+
+
+def test_a_user_value_above_a_limit_is_refused_in_its_own_units(tmp_path, capsys):
+    rc, lines = play(tmp_path, line_plan(), PATTERN, "--watchdog-ms", "100000")
+    err = capsys.readouterr().err
+    assert rc == 2 and "--watchdog-ms 100000: a user setting can only lower a limit; " \
+        "watchdog_s is 0.25 (project default" in err
+    assert refused(lines)["field"] == "--watchdog-ms"
 
 
 def test_a_plan_from_another_model_is_refused(tmp_path, capsys):
