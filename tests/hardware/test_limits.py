@@ -183,3 +183,15 @@ def test_the_device_limit_refuses_before_the_first_frame_on_serial(tmp_path, cap
     (record,) = (tmp_path / "session").iterdir()
     r = refused([json.loads(x) for x in record.read_text().splitlines()])
     assert r["field"] == "timing.overdrive_level" and r["owner"] == "device (its STATUS)"
+
+
+def test_status_carries_the_device_limits_and_the_shorter_status_still_decodes():
+    from hardware.protocol import Status, decode_status, encode_status
+
+    with_limits = Status(0, 250, (0.5, 0.0), 1.3636, 10000)
+    back = decode_status(encode_status(with_limits))
+    assert back.max_on_ms == 10000 and back.max_level == pytest.approx(1.3636, abs=1 / 4096)
+    old = Status(0, 250, (0.5, 0.0))
+    assert len(encode_status(old)) == 8 and decode_status(encode_status(old)) == old
+    with pytest.raises(ValueError, match="does not match"):
+        decode_status(encode_status(with_limits)[:-1])
