@@ -111,10 +111,14 @@ def test_cli_reports_a_watchdog_stop_exits_1_and_records_it(tmp_path, capsys, mo
 
 
 def test_cli_reports_an_on_time_stop(tmp_path, capsys):
-    # a device that does not report its on-time limit stops a 305 ms stimulus at 300 ms
-    steps = [{"sites": [0], "duration_ms": 305.0, "gap_ms": 60.0},
+    # a device that does not report its on-time limit stops a 500 ms stimulus (a 250 ms kick
+    # and 250 ms steady: each segment within its 300 ms) at 300 ms
+    steps = [{"sites": [0], "duration_ms": 500.0, "gap_ms": 60.0},
              {"sites": [1], "duration_ms": 100.0, "gap_ms": 0.0}]
     plan, pattern = files(tmp_path, steps)
+    d = line_plan()
+    d["timing"]["overdrive_ms"] = 250.0
+    plan.write_text(json.dumps(sealed(d)))
     with PtyEmulator(3, max_level=1.6, max_on_s=0.3, report_limits=False) as emu:
         rc = main(["play", str(plan), str(pattern), "--device", f"serial:{emu.port}"])
         reasons = {e.reason for e in emu.array.events}
