@@ -10,6 +10,8 @@ import json
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from hapticrom.cli import main
 from hapticrom.documents import schema
@@ -140,3 +142,38 @@ def test_the_schema_checker_refuses_keywords_it_does_not_know():
         schema_problems(1, {"multipleOf": 2})
     assert schema_problems(3, {"type": "number", "maximum": 2}) == [("<plan>",
                                                                      "3 breaks maximum 2")]
+
+
+def _leaves(d, path=()):
+    """Every (path, value) of the scalars in a JSON tree."""
+    if isinstance(d, dict):
+        for k, v in d.items():
+            yield from _leaves(v, (*path, k))
+    elif isinstance(d, list):
+        for i, v in enumerate(d):
+            yield from _leaves(v, (*path, i))
+    else:
+        yield path, d
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_any_single_changed_value_is_never_taken_for_the_sealed_plan(written, data):
+    leaves = [p for p, v in _leaves(written) if p != ("plan_sha256",)]
+    path = data.draw(st.sampled_from(leaves))
+    new = data.draw(st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(),
+                              st.text(max_size=5), st.booleans(), st.none()))
+    d = copy.deepcopy(written)
+    node = d
+    for key in path[:-1]:
+        node = node[key]
+    if node[path[-1]] == new and type(node[path[-1]]) is type(new):
+        return
+    node[path[-1]] = new
+    try:
+        rec = check_plan(d, schema("plan"))
+    except PlanRecordError as err:  # refused naming a key, never another exception
+        assert err.field
+        return
+    assert rec.status == "edited"
