@@ -226,7 +226,7 @@ class ExposureMeter:
                 continue
             try:
                 state = json.loads(line)
-            except json.JSONDecodeError:
+            except (json.JSONDecodeError, RecursionError):
                 if line.startswith('{"date"') and not line.rstrip().endswith("}"):
                     continue  # a line torn by a crash while it was written
                 raise SafetyError("exposure-file", f"--exposure-file {path}: line {i} is not "
