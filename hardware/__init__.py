@@ -1,11 +1,17 @@
 """Driving a planned array: the device interface and its back ends (``serial``, ``sim``,
 ``log``), the frame protocol, the pattern file, and the host-side safety limits.
 
-    from hardware import build_schedule, load_pattern, load_plan, open_device
-    plan = load_plan("out/plan.json")
+    from hardware import (build_schedule, load_pattern, load_plan, open_device, preflight,
+                          resolve_limits)
+    plan = load_plan("out/plan.json")              # plan.record: sealed / edited / unsealed
     schedule = build_schedule(load_pattern("examples/pattern-sweep.toml"), plan)
-    with open_device("sim", plan, Path("out/play")) as dev:
+    limits = resolve_limits(plan.frequency_hz)     # the actuator's (then device, user: below)
+    preflight(plan, schedule, limits)              # refuses what asks beyond them
+    with open_device("sim", plan, Path("out/play"), limits.limits) as dev:
         dev.play(schedule)
+
+The limits come from the device, the actuator's rated values and the user, never from the plan
+(:mod:`hardware.limits`, docs/protocol.md).
 
 The run-time path only: numpy, onnxruntime (through ``surrogate.runtime``), pyserial for the
 serial port, matplotlib for the simulated array's figures; never the FE solver, torch,
