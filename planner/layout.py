@@ -28,8 +28,12 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     max_ratio = 0.1                 # ratio: leakage at a site / its own amplitude, at most
     superposition = "incoherent"    # "incoherent" (independent ERMs: powers add) | "worst"
     drive_level = 1.0               # perceptual: running amplitude / the surrogate's (nominal)
+    holds_at = "bounds_95"          # rank on the pitch at which the criterion holds with the
+                                    # model's 95 % bounds (default) | "nominal": the prediction
     # threshold_hz, threshold_um, threshold_source: perceptual: a threshold table of one's own
     # contactor_area_cm2: perceptual: rescale the curve to this contact area (3 dB / doubling)
+    # body_site = "thigh"           # where the array is worn: a warning when the threshold
+                                    # curve is for another site (the default: volar forearm)
 
     [timing]                        # the envelope timing of the chosen unit (planner.timing)
     model = "models/rom-default"    # the transient ROM; enabled = false skips the timing
@@ -78,6 +82,7 @@ GRIDS = ("square", "hex", "free")
 SUPERPOSITIONS = ("incoherent", "worst")
 OBJECTIVES = ("min_pitch", "max_sites")
 KINDS = ("ratio", "perceptual")
+HOLDS_AT = ("bounds_95", "nominal")
 MAX_SITES_PER_SIDE = 32
 FREE_SITES = (2, 256)  # grid = "free": number of given positions
 POSITION_LIMIT_MM = 1000.0  # |x|, |y| of a free position: the pitch bound's 1 m
@@ -99,6 +104,23 @@ class CriterionSpec:
     kind: str = "ratio"
     drive_level: float = 1.0
     threshold: ThresholdCurve | None = None  # perceptual only
+    holds_at: str = "bounds_95"  # the pitch ranked and laid out: at the 95 % bounds | nominal
+    body_site: str | None = None  # where the array is worn (checked against the curve's site)
+
+    def warnings(self) -> list[str]:
+        """Perceptual criterion: a warning when the threshold curve is not for the body site
+        of the array (or no site is named), naming the curve used."""
+        t = self.threshold
+        if self.kind != "perceptual" or t is None or not t.site:
+            return []
+        if self.body_site is None:
+            return [f"no criterion.body_site given: the detection threshold is the {t.site} "
+                    f"curve ({t.source}); name the site, or give a threshold table for it"]
+        if self.body_site.strip().lower() in t.site.lower():
+            return []
+        return [f"criterion.body_site = {self.body_site!r} has no threshold data of its own: "
+                f"the {t.site} curve is used ({t.source}); give threshold_hz, threshold_um "
+                "and threshold_source measured at that site"]
 
 
 @dataclass(frozen=True)
@@ -167,6 +189,8 @@ _CRITERION = {"kind": Spec(str, "ratio", choices=KINDS),
               "max_ratio": Spec(float, 0.1, "(0, 1]"),
               "superposition": Spec(str, "incoherent", choices=SUPERPOSITIONS),
               "drive_level": Spec(float, 1.0, "(0, 10]"),
+              "holds_at": Spec(str, "bounds_95", choices=HOLDS_AT),
+              "body_site": Spec(str, None),
               "threshold_hz": Spec(tuple, None, "(0, 1e4]"),
               "threshold_um": Spec(tuple, None, "(0, 1e4]"),
               "threshold_source": Spec(str, None),
@@ -228,7 +252,8 @@ def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
         if extra:
             raise LayoutError(f"criterion.{extra[0]}", f"criterion.{extra[0]}: only for "
                               'criterion.kind = "perceptual"')
-        return CriterionSpec(c["max_ratio"], c["superposition"], "ratio", c["drive_level"])
+        return CriterionSpec(c["max_ratio"], c["superposition"], "ratio", c["drive_level"],
+                             holds_at=c["holds_at"], body_site=c["body_site"])
     curve = VERRILLO_1966_FOREARM
     if all(given):
         try:
@@ -246,7 +271,7 @@ def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
         raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {bad[0]:g} Hz is "
                           f"outside the threshold curve's range [{lo:g}, {hi:g}] Hz")
     return CriterionSpec(c["max_ratio"], c["superposition"], "perceptual", c["drive_level"],
-                         curve)
+                         curve, c["holds_at"], c["body_site"])
 
 
 def _sites(array: dict[str, Any]) -> tuple[int, int, tuple | None]:
