@@ -17,9 +17,10 @@ the step.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -113,7 +114,10 @@ def load_plan(path: str | Path) -> PlanFile:
         raise PlanFileError("<file>", f"cannot read plan {str(path)!r}: {err}") from None
     except json.JSONDecodeError as err:
         raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
-    return plan_from_dict(data)
+    from planner.paths import resolve_plan_models  # model paths are relative to the plan
+
+    plan = plan_from_dict(data)  # checked as written; then its model paths made usable here
+    return replace(plan, data=resolve_plan_models(copy.deepcopy(plan.data), path))
 
 
 @dataclass(frozen=True)

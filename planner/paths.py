@@ -2,7 +2,7 @@
 can be played from any working directory (and moved together with the models beside it).
 
 ``hapticrom plan --out DIR/plan.json`` writes ``model`` and ``timing.model`` relative to DIR
-(:func:`relative_to_plan`); readers resolve them against the plan file's directory
+(:func:`relative_plan_models`); readers resolve them against the plan file's directory
 (:func:`resolve_from_plan`). Plans written before this rule held paths relative to the
 working directory they were made in: when the path does not exist beside the plan but does
 from the working directory, that one is used.
@@ -14,7 +14,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["relative_to_plan", "resolve_from_plan", "resolve_plan_models"]
+__all__ = ["relative_plan_models", "relative_to_plan", "resolve_from_plan",
+           "resolve_plan_models"]
 
 
 def relative_to_plan(model: str, plan_path: str | Path) -> str:
@@ -50,3 +51,15 @@ def resolve_plan_models(data: Any, plan_path: str | Path) -> Any:
     if isinstance(timing, dict) and isinstance(timing.get("model"), str):
         timing["model"] = resolve_from_plan(timing["model"], plan_path)
     return data
+
+
+def relative_plan_models(doc: dict[str, Any], plan_path: str | Path) -> dict[str, Any]:
+    """A copy of the plan mapping ``doc`` (``planner.plan_to_dict``) with ``model`` and
+    ``timing.model`` relative to the directory ``plan_path`` will be written in."""
+    out = dict(doc)
+    if isinstance(out.get("model"), str):
+        out["model"] = relative_to_plan(out["model"], plan_path)
+    timing = out.get("timing")
+    if isinstance(timing, dict) and isinstance(timing.get("model"), str):
+        out["timing"] = {**timing, "model": relative_to_plan(timing["model"], plan_path)}
+    return out

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from planner.figure import write_plan_plot
 from planner.optimise import PITCH_TOL_MM, Z95, Plan
-from planner.paths import relative_to_plan
-from planner.summary import validity
 
 __all__ = ["plan_to_dict", "write_plan_plot"]
 
@@ -19,10 +16,10 @@ def _r(x: float | None, digits: int = 4) -> float | None:
     return None if x is None else float(round(x, digits))
 
 
-def plan_to_dict(plan: Plan, plan_path: str | Path | None = None) -> dict[str, Any]:
-    """Everything a user or the play step needs: request, candidates, the chosen array.
-    With ``plan_path`` (where the plan will be written) the model paths are stored relative
-    to that file's directory (:mod:`planner.paths`)."""
+def plan_to_dict(plan: Plan) -> dict[str, Any]:
+    """Everything a user or the play step needs: request, candidates, the chosen array."""
+    from planner.summary import validity
+
     req = plan.request
     cands = [{"name": c.name, "frequency_hz": c.frequency_hz, "inputs": c.inputs,
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
@@ -51,14 +48,8 @@ def plan_to_dict(plan: Plan, plan_path: str | Path | None = None) -> dict[str, A
             "threshold_um": [round(x, 6) for x in t.threshold_um],
             "at_best_frequency_um": None if best is None else
             _r(float(t(best.frequency_hz)), 6)}
-    timing = plan.timing
-    model = req.model
-    if plan_path is not None:
-        model = relative_to_plan(model, plan_path)
-        if timing is not None and timing.get("model"):
-            timing = {**timing, "model": relative_to_plan(timing["model"], plan_path)}
     return {
-        "format": "hapticrom-plan", "version": 1, "model": model,
+        "format": "hapticrom-plan", "version": 1, "model": req.model,
         "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid,
                   "objective": req.objective, "region_mm": req.region_mm},
         "criterion": criterion,
@@ -74,7 +65,7 @@ def plan_to_dict(plan: Plan, plan_path: str | Path | None = None) -> dict[str, A
         "leakage_um": np.round(plan.leakage_um, 6).tolist(),
         "criterion_load": np.round(plan.loads, 6).tolist(),
         "uncertainty": None if best is None else uncertainty(plan),
-        "timing": timing,
+        "timing": plan.timing,
         "validity": validity(plan),
         "dropped_frequencies": plan.dropped,
         "not_playable": plan.unplayable,

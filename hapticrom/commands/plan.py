@@ -125,6 +125,7 @@ def _print_plan(plan: Any) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from planner import load_layout, plan_layout, plan_to_dict, write_plan_plot
+    from planner.paths import relative_plan_models
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
@@ -135,7 +136,7 @@ def _run(args: argparse.Namespace) -> int:
     if verify is not None:
         _print_verify(verify)
     if args.out:
-        doc = plan_to_dict(plan, plan_path=args.out)
+        doc = relative_plan_models(plan_to_dict(plan), args.out)
         if args.verify:
             doc["verify"] = verify
         with atomic_path(args.out) as tmp:

@@ -97,7 +97,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="longest continuous on-time per channel (default 10000)")
     p.add_argument("--max-duty", type=_fraction, metavar="FRACTION",
                    help="largest on-time fraction of any 60 s window (default 0.5)")
-    p.add_argument("--watchdog-ms", type=_positive_ms, metavar="MS",
+    p.add_argument("--watchdog-ms", type=number_in(0.0, 60_000.0, "ms"), metavar="MS",
                    help="serial: the heartbeat deadline the host keeps (default 250)")
     p.add_argument("--exposure-file", type=Path, metavar="JSON",
                    help="serial: today's accumulated exposure, read and updated")

@@ -34,6 +34,6 @@ def real_plan() -> dict[str, Any]:
         with open("examples/forearm-layout.toml", "rb") as f:
             d = tomllib.load(f)
         d["array"].update(rows=2, cols=2)
-        d["drive"]["frequencies_hz"] = [180.0]
+        d["drive"]["frequencies_hz"] = [100.0]
         _REAL.update(plan_to_dict(plan_layout(layout_from_dict(d))), timing=dict(TIMING))
     return copy.deepcopy(_REAL)
