@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from planner.layout import LayoutError
+from planner.layout import LayoutError, short_repr
 from surrogate.runtime.encoding import InputSpec
 
 __all__ = ["Bound", "Domain", "Extrapolation", "build_domain", "check_value", "drive_reach"]
@@ -149,10 +149,11 @@ def check_value(bound: Bound, value: Any, where: str,
     ``allow_extrapolation`` (then the :class:`Extrapolation` is returned)."""
     if bound.type == "categorical":
         if not isinstance(value, str) or value not in bound.choices:
-            raise LayoutError(where, f"{where} = {value!r}: expected {bound.allowed()}")
+            raise LayoutError(where, f"{where} = {short_repr(value)}: expected "
+                              f"{bound.allowed()}")
         return None
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise LayoutError(where, f"{where} = {value!r}: expected {bound.allowed()}")
+        raise LayoutError(where, f"{where} = {short_repr(value)}: expected {bound.allowed()}")
     x = float(value)
     if not math.isfinite(x):
         raise LayoutError(where, f"{where} = {value!r}: expected a finite number; allowed "
@@ -166,9 +167,10 @@ def check_value(bound: Bound, value: Any, where: str,
         advice = ("" if bound.type == "integer" else "; set model.allow_extrapolation = true "
                   "to plan outside it (flagged in the plan)")
         ranges = "; ".join(f"{m}: [{r[0]:.4g}, {r[1]:.4g}]" for m, r in bound.sources.items())
+        unit = f" {bound.unit}" if bound.unit else ""
         raise LayoutError(where, f"{where} = {x:g} is outside the plan's validity domain "
-                          f"{bound.allowed()} (the intersection of the models' trained ranges: "
-                          f"{ranges}){advice}")
+                          f"[{bound.low:.4g}, {bound.high:.4g}]{unit} (the intersection of the "
+                          f"models' trained ranges: {ranges}){advice}")
     return Extrapolation(where, x, float(bound.low), float(bound.high),  # type: ignore[arg-type]
                          tuple(models))
 

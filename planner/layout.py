@@ -76,7 +76,7 @@ from fieldspec.toml import read_toml_file
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
-           "load_layout"]
+           "load_layout", "short_repr"]
 
 GRIDS = ("square", "hex", "free")
 SUPERPOSITIONS = ("incoherent", "worst")
@@ -84,6 +84,8 @@ OBJECTIVES = ("min_pitch", "max_sites")
 KINDS = ("ratio", "perceptual")
 HOLDS_AT = ("bounds_95", "nominal")
 MAX_SITES_PER_SIDE = 32
+MAX_FREQUENCIES = 64  # drive.frequencies_hz: values at most
+MAX_NAME = 64  # design.name: characters at most
 FREE_SITES = (2, 256)  # grid = "free": number of given positions
 POSITION_LIMIT_MM = 1000.0  # |x|, |y| of a free position: the pitch bound's 1 m
 
@@ -159,19 +161,28 @@ _MODEL = {"path": Spec(str, "models/nn-default"),
           "allow_extrapolation": Spec(bool, False)}
 
 
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (long inputs are summarised, not echoed)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
 def _read_positions(value: Any, spec: Spec, path: str, ctx: Context) -> tuple:
     """``[[x, y], ...]`` [mm]: FREE_SITES sites, each two finite numbers within the limit."""
     lo, hi = FREE_SITES
     if not isinstance(value, list | tuple) or not lo <= len(value) <= hi:
+        got = (f"a list of {len(value)} positions" if isinstance(value, list | tuple) else
+               short_repr(value))
         raise ctx.error(path, f"{path}: expected a list of {lo} to {hi} [x, y] positions [mm], "
-                        f"got {value!r}")
+                        f"got {got}")
     xy = Spec(tuple, None, f"[-{POSITION_LIMIT_MM:g}, {POSITION_LIMIT_MM:g}]")
     out = []
     for i, item in enumerate(value):
         where = f"{path}[{i}]"
         pair = read_value(item, xy, "positions_mm", where, ctx)
         if len(pair) != 2:
-            raise ctx.error(where, f"{where} = {item!r}: expected two numbers [x, y] [mm]")
+            raise ctx.error(where, f"{where} = {short_repr(item)}: expected two numbers [x, y] "
+                            "[mm]")
         out.append((pair[0], pair[1]))
     return tuple(out)
 
@@ -210,8 +221,8 @@ def _inputs(raw: Any, path: str, ctx: Context) -> dict[str, Any]:
     table = require_table(raw, path, list(raw) if isinstance(raw, dict) else [], ctx)
     for key, value in table.items():
         if isinstance(value, bool) or not isinstance(value, int | float | str):
-            raise LayoutError(f"{path}.{key}", f"{path}.{key} = {value!r}: expected a number "
-                              "or a choice (text)")
+            raise LayoutError(f"{path}.{key}", f"{path}.{key} = {short_repr(value)}: expected a "
+                              "number or a choice (text)")
     return dict(table)
 
 
@@ -232,8 +243,9 @@ def _design(raw: Any, path: str, i: int, ctx: Context) -> dict[str, Any]:
                               f"{path}.any = true")
     d = _inputs(table, path, ctx)
     name = d.pop("name", f"design{i}")
-    if not isinstance(name, str) or not name:
-        raise LayoutError(f"{path}.name", f"{path}.name = {name!r}: expected a non-empty text")
+    if not isinstance(name, str) or not 0 < len(name) <= MAX_NAME:
+        raise LayoutError(f"{path}.name", f"{path}.name = {short_repr(name)}: expected a "
+                          f"non-empty text of at most {MAX_NAME} characters")
     return {"name": name, "inputs": d, **opts}
 
 
@@ -341,6 +353,10 @@ def layout_from_dict(d: Any) -> LayoutRequest:
         if "frequency_hz" in x["inputs"]:
             raise LayoutError(f"design[{i}].frequency_hz", f"design[{i}].frequency_hz: the "
                               "drive frequency goes in [drive] frequencies_hz")
+    if len(drive["frequencies_hz"]) > MAX_FREQUENCIES:
+        n = len(drive["frequencies_hz"])
+        raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {n} values; give at "
+                          f"most {MAX_FREQUENCIES}")
     rows, cols, positions = _sites(array)
     return LayoutRequest(model["path"], rows, cols, array["grid"],
                          array["min_pitch_mm"], array["max_pitch_mm"], site,

@@ -48,7 +48,8 @@ def _header(plan: Any) -> str:
     req = plan.request
     crit = req.criterion
     limit = (f"leakage <= {crit.max_ratio:g} of own amplitude" if crit.kind == "ratio" else
-             f"leakage below the detection threshold ({crit.threshold.source}), drive level "
+             f"leakage below the detection threshold (the "
+             f"{crit.threshold.site or crit.threshold.source} curve), drive level "
              f"{crit.drive_level:g}")
     shape = (f"{req.cols} free sites" if req.grid == "free" else
              f"{req.rows} x {req.cols} {req.grid} array")
@@ -190,7 +191,7 @@ def _verify(plan: Any) -> dict[str, Any]:
     holds = felt and load <= 1.0
     return {
         "design": best.name, "frequency_hz": best.frequency_hz,
-        "holds": holds, "criterion": req.criterion.kind,
+        "edge_radius_mm": round(best.edge_radius_mm, 4), "holds": holds, "criterion": req.criterion.kind,
         "surrogate": {"center_um": round(best.center_um, 4),
                       "edge_um": round(best.edge_um, 4),
                       "pitch_mm": round(best.pitch_mm, 3),
@@ -200,6 +201,7 @@ def _verify(plan: Any) -> dict[str, Any]:
                "edge_um": round(float(out["edge_amplitude_um"]), 4),
                "pitch_mm": None if fe_pitch is None else round(fe_pitch, 3),
                "criterion_load_at_plan_pitch": round(load, 4), "felt": felt,
+               "profile_end_from_edge_mm": float(fe.distance_mm[-1]),
                "dofs": int(out["dofs"]), "wall_s": round(float(out["wall_s"]), 2)},
         "scene_inputs": {k: row[k] for k in sorted(row)},
     }
@@ -217,6 +219,10 @@ def _print_verify(v: dict[str, Any]) -> None:
           f"({s['edge_um'] / f['edge_um'] - 1:+.1%})")
     print(f"  pitch   planned {s['pitch_mm']:7.2f} mm   FE needs {fe_pitch}")
     load = f["criterion_load_at_plan_pitch"]
+    end = f.get("profile_end_from_edge_mm")
+    if end is not None and s["pitch_mm"] - v["edge_radius_mm"] > end:
+        print(f"  (the FE profile ends {end:g} mm from the unit's edge too: beyond it the FE "
+              "side also uses the log-slope extension)")
     if v["holds"]:
         print(f"  verdict: HOLDS on the FE: criterion load {load:.3f} <= 1 at the planned "
               f"pitch {s['pitch_mm']:.2f} mm")
