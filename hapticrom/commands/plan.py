@@ -191,7 +191,8 @@ def _verify(plan: Any) -> dict[str, Any]:
     holds = felt and load <= 1.0
     return {
         "design": best.name, "frequency_hz": best.frequency_hz,
-        "edge_radius_mm": round(best.edge_radius_mm, 4), "holds": holds, "criterion": req.criterion.kind,
+        "edge_radius_mm": round(best.edge_radius_mm, 4), "holds": holds,
+        "criterion": req.criterion.kind,
         "surrogate": {"center_um": round(best.center_um, 4),
                       "edge_um": round(best.edge_um, 4),
                       "pitch_mm": round(best.pitch_mm, 3),
