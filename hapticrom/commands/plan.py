@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -132,7 +133,11 @@ def _run(args: argparse.Namespace) -> int:
         if getattr(args, opt):
             check_output_file(f"--{opt}", getattr(args, opt))
     plan = plan_layout(load_layout(args.layout))
-    verify = _verify(plan) if args.verify and plan.best is not None else None
+    try:
+        verify = _verify(plan) if args.verify and plan.best is not None else None
+    except RuntimeError as err:  # the FE solve itself failed: said, no traceback, nothing written
+        print(f"hapticrom plan: failed: {err}", file=sys.stderr)
+        return 1
     _print_plan(plan)
     if verify is not None:
         _print_verify(verify)
