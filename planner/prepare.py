@@ -20,7 +20,7 @@ import numpy as np
 
 from planner.candidates import expand_any
 from planner.domain import Domain, Extrapolation, build_domain, check_value, drive_reach
-from planner.layout import LayoutError, LayoutRequest
+from planner.layout import LayoutError, LayoutRequest, short_repr
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
 
@@ -49,9 +49,9 @@ def _load_rom(req: LayoutRequest) -> Any:
     try:
         return load_envelope_model(req.timing.model)
     except (OSError, ValueError, KeyError, RomBlowUpError) as err:
-        raise LayoutError("timing.model", f"timing.model = {req.timing.model!r}: {err} (set "
-                          "timing.enabled = false to plan without timing; play needs it)"
-                          ) from None
+        raise LayoutError("timing.model", f"timing.model = {short_repr(req.timing.model)}: "
+                          f"{err} (set timing.enabled = false to plan without timing; play "
+                          "needs it)") from None
 
 
 def _unknown(where: str, key: str, req: LayoutRequest, names: tuple[str, ...]) -> LayoutError:
@@ -135,7 +135,10 @@ def prepare(req: LayoutRequest) -> Prepared:
     """Check the request against its models and predict every candidate (module docstring)."""
     from surrogate.runtime.rom import MotorConstants
 
-    predictor = load_predictor(req.model)
+    try:
+        predictor = load_predictor(req.model)
+    except (OSError, ValueError) as err:  # ModelFileError: missing, malformed, altered
+        raise LayoutError("model.path", f"model.path = {short_repr(req.model)}: {err}") from None
     rom = _load_rom(req) if req.timing.enabled else None
     motor = rom.motor if rom is not None else MotorConstants()
     domain = build_domain(predictor, req.model, rom, req.timing.model if rom else None)

@@ -5,6 +5,7 @@ with its range."""
 
 from __future__ import annotations
 
+import copy
 import tomllib
 
 import pytest
@@ -78,3 +79,28 @@ def test_watchdog_ms_is_reported_in_ms_with_its_range(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "--watchdog-ms" in err and "(0, 60000] ms" in err
     assert "watchdog_s" not in err and "Traceback" not in err
+
+
+BAD_VALUES = ("sideways", 1.5, -1, 1e9, float("nan"), True, [], {}, "14")
+
+
+def test_every_value_of_the_thigh_layout_mutated_is_a_named_error_or_a_plan():
+    """Each key of every table (and of the first design) set to each bad value: the answer is
+    a plan or a LayoutError naming that key's table, never another exception, never a long
+    echo."""
+    base = thigh()
+    keys = [(table, k) for table, t in base.items() if isinstance(t, dict) for k in t]
+    keys += [("design", k) for k in base["design"][0]]
+    n_errors = 0
+    for table, key in keys:
+        for value in BAD_VALUES:
+            d = copy.deepcopy(base)
+            (d["design"][0] if table == "design" else d[table])[key] = value
+            try:
+                plan_layout(layout_from_dict(d))
+            except LayoutError as err:
+                n_errors += 1
+                assert err.field.split(".")[0].split("[")[0] == table, (table, key, value)
+                assert key in err.field or key in str(err), (table, key, value, str(err))
+                assert len(str(err)) < 600
+    assert n_errors > 250
