@@ -117,6 +117,8 @@ def _print_plan(plan: Any) -> None:
                                        f"{k} = {v}" for k, v in best.inputs.items()))
     _print_uncertainty(plan)
     _print_timing(plan.timing)
+    if not plan.request.timing.enabled:
+        print("  timing: not computed ([timing] enabled = false); `hapticrom play` needs it")
     lines = summary_lines(validity(plan))
     print("  extrapolation: " + ("none (every value inside the plan's domain, the leakage "
                                  "inside the model's profile)" if not lines else
