@@ -64,7 +64,8 @@ def _header(plan: Any) -> str:
 
 def _candidate_line(c: Any, free: bool) -> str:
     if c.pitch_mm is None:
-        pitch = "infeasible"
+        pitch = "infeasible" + ("" if c.pitch_nominal_mm is None else
+                                f" at the 95 % bounds (nominal {c.pitch_nominal_mm:.2f} mm)")
     elif free:
         pitch = (f"nearest sites {c.pitch_mm:6.2f} mm, worst load {c.load:.3f} (margin "
                  f"{1 / c.load if c.load else float('inf'):.3f})")
