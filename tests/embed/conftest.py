@@ -90,3 +90,14 @@ def node() -> str:
     if not (EMBED / "node_modules" / "onnxruntime-node").is_dir():
         _require("embed/node_modules is missing: run `npm ci` in embed/")
     return exe
+
+
+@pytest.fixture(scope="session")
+def chromium(node) -> str:
+    """Debian's chromium, and playwright-core in embed/node_modules."""
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        _require("chromium is not installed (apt-get install chromium)")
+    if not (EMBED / "node_modules" / "playwright-core").is_dir():
+        _require("embed/node_modules is missing: run `npm ci` in embed/")
+    return exe
