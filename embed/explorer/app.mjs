@@ -34,12 +34,21 @@ function toPos(spec, v) {
 }
 const shown = (v) => formatG(Number(v.toPrecision(4)));
 
+/** Axis ticks 0, step, ... covering max, step 1, 2, 2.5 or 5 times a power of ten. */
+function niceTicks(max, n = 4) {
+  const raw = max / n;
+  const p = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * p).find((v) => v >= raw);
+  return Array.from({ length: Math.ceil(max / step - 1e-9) + 1 }, (_, k) => k * step);
+}
+
 function buildInputs(specs) {
   const box = $("inputs");
   for (const s of specs) {
     const row = el("div", { class: "input", id: `in-${s.name}` }, box);
     const label = el("label", { for: `ctl-${s.name}` }, row);
-    label.textContent = `${s.name}${s.unit ? ` [${s.unit}]` : ""}`;
+    const slug = (t) => t.toLowerCase().replace(/[^a-z0-9]/g, "");
+    label.textContent = s.unit && !slug(s.name).endsWith(slug(s.unit)) ? `${s.name} [${s.unit}]` : s.name;
     const out = el("output", { id: `val-${s.name}` }, label);
     let ctl;
     if (s.type === "categorical") {
@@ -128,7 +137,8 @@ function drawResponse(r) {
   svg.replaceChildren();
   if (!r) return;
   const W = 640, H = 220, L = 56, R = 16, T = 14, B = 38;
-  const ymax = Math.max(...r.center, ...r.edge) * 1.05;
+  const yt = niceTicks(Math.max(...r.center, ...r.edge));
+  const ymax = yt[yt.length - 1];
   const x = (v) => L + ((v - r.f[0]) / (r.f[r.f.length - 1] - r.f[0])) * (W - L - R);
   const y = (v) => T + (1 - v / ymax) * (H - T - B);
   const pts = (ys) => r.f.map((v, k) => `${x(v).toFixed(2)},${y(ys[k]).toFixed(2)}`).join(" ");
@@ -138,15 +148,14 @@ function drawResponse(r) {
   el("line", { x1: x(f0), y1: T, x2: x(f0), y2: H - B, stroke: "#999", "stroke-dasharray": "2 2" }, svg, SVG);
   el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#444" }, svg, SVG);
   el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#444" }, svg, SVG);
+  for (const v of yt) el("text", { x: L - 6, y: y(v) + 4, "text-anchor": "end", "font-size": "11" }, svg, SVG).textContent = shown(v);
   for (let k = 0; k <= 4; k++) {
-    const v = (ymax * k) / 4;
-    el("text", { x: L - 6, y: y(v) + 4, "text-anchor": "end", "font-size": "11" }, svg, SVG).textContent = shown(v);
     const fv = r.f[0] + ((r.f[r.f.length - 1] - r.f[0]) * k) / 4;
     el("text", { x: x(fv), y: H - B + 16, "text-anchor": "middle", "font-size": "11" }, svg, SVG).textContent = shown(fv);
   }
   el("text", { x: (L + W - R) / 2, y: H - 4, "text-anchor": "middle", "font-size": "12" }, svg, SVG).textContent = "frequency [Hz]";
   el("text", { x: 14, y: (T + H - B) / 2, "text-anchor": "middle", "font-size": "12", transform: `rotate(-90 14 ${(T + H - B) / 2})` }, svg, SVG).textContent = "amplitude [µm]";
-  el("text", { x: W - R, y: T + 12, "text-anchor": "end", "font-size": "11", fill: "#08519c" }, svg, SVG).textContent = "centre (solid), edge (dashed)";
+  el("text", { x: W - R - 4, y: H - B - 8, "text-anchor": "end", "font-size": "11", fill: "#08519c" }, svg, SVG).textContent = "centre (solid), edge (dashed); dotted: this design";
 }
 
 function drawProfile(o) {
@@ -157,7 +166,8 @@ function drawProfile(o) {
   const hi = o.profile_um_high95[0];
   const mid = o.profile_um[0];
   const W = 640, H = 300, L = 56, R = 16, T = 16, B = 40;
-  const ymax = Math.max(...hi, o.center_amplitude_um[0]) * 1.05;
+  const yt = niceTicks(Math.max(...hi, o.center_amplitude_um[0]));
+  const ymax = yt[yt.length - 1];
   const x = (v) => L + ((v - d[0]) / (d[d.length - 1] - d[0])) * (W - L - R);
   const y = (v) => T + (1 - v / ymax) * (H - T - B);
   const pts = (xs, ys) => xs.map((v, k) => `${x(v).toFixed(2)},${y(ys[k]).toFixed(2)}`).join(" ");
@@ -165,9 +175,8 @@ function drawProfile(o) {
   el("polyline", { id: "mean", points: pts(d, mid), fill: "none", stroke: "#08519c", "stroke-width": "2" }, svg, SVG);
   el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#444" }, svg, SVG);
   el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#444" }, svg, SVG);
+  for (const v of yt) el("text", { x: L - 6, y: y(v) + 4, "text-anchor": "end", "font-size": "11" }, svg, SVG).textContent = shown(v);
   for (let k = 0; k <= 4; k++) {
-    const v = (ymax * k) / 4;
-    el("text", { x: L - 6, y: y(v) + 4, "text-anchor": "end", "font-size": "11" }, svg, SVG).textContent = shown(v);
     const dv = d[0] + ((d[d.length - 1] - d[0]) * k) / 4;
     el("text", { x: x(dv), y: H - B + 16, "text-anchor": "middle", "font-size": "11" }, svg, SVG).textContent = shown(dv);
   }
@@ -221,6 +230,7 @@ function drawArray(o) {
   const line = (id, text, value) => { const p = el("p", { id }, box); p.textContent = text; p.dataset.value = String(value); };
   line("arr-neighbour", `one neighbour at ${shown(pitch)} mm: ${shown(nb)} µm (${shown(100 * nb / field.centerUm)} % of the centre)`, nb);
   line("arr-crosstalk", `worst site leakage (all others, incoherent): ${shown(100 * worst)} %`, worst);
+  line("arr-note", "darker: more leakage at that site; the planner's rules (planner/crosstalk.py)", worst);
 }
 
 async function fetchBytes(url) {
