@@ -26,12 +26,12 @@ async function main(argv) {
   if (args.length !== 2 || (outAt >= 0 && !out)) usage("expected MODEL_DIR and DESIGNS.json");
   const [dir, designsPath] = args;
   const cardText = readFileSync(join(dir, "card.json"), "utf8");
-  const present = readdirSync(dir, { withFileTypes: true }).map((e) => e.name);
+  const entries = readdirSync(dir, { withFileTypes: true });
+  const present = entries.map((e) => e.name);
+  const regular = new Set(entries.filter((e) => e.isFile()).map((e) => e.name)); // no symlinks
   const listed = Object.keys(JSON.parse(cardText).files ?? {});
-  const files = {};
-  for (const name of listed) {
-    try { files[name] = new Uint8Array(readFileSync(join(dir, name))); } catch { /* reported as missing */ }
-  }
+  const files = {}; // only regular files of this directory; anything else is reported missing
+  for (const name of listed) if (regular.has(name)) files[name] = new Uint8Array(readFileSync(join(dir, name)));
   const model = await HapticModel.load({
     ort, cardText, files, present,
     sessionOptions: { intraOpNumThreads: 1, interOpNumThreads: 1, executionMode: "sequential" },
