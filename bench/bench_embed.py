@@ -18,6 +18,7 @@ Builds the hapticrom-runtime and hapticrom-models wheels from packaging/, create
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import statistics
 import subprocess
@@ -70,10 +71,10 @@ print(json.dumps({"import_ms": 1e3 * (t1 - t0), "load_ms": 1e3 * (t2 - t1),
 
 def build_wheels(out: Path) -> list[Path]:
     """The two run-time wheels, built from packaging/ into ``out``."""
+    isolation = [] if importlib.util.find_spec("setuptools") is None else ["--no-build-isolation"]
     for dist in ("runtime", "models"):
         subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet",
-                        "--no-build-isolation", "-w", str(out), str(REPO / "packaging" / dist)],
-                       check=True)
+                        *isolation, "-w", str(out), str(REPO / "packaging" / dist)], check=True)
     return sorted(out.glob("hapticrom_*.whl"))
 
 

@@ -76,3 +76,39 @@ def test_page_numbers_equal_the_python_predictor(page):
             np.testing.assert_allclose(got[key], ref, rtol=RTOL, err_msg=f"design {i}: {key}")
             worst = max(worst, float(np.max(np.abs(np.subtract(got[key], ref)) / np.abs(ref))))
     print(f"explorer vs Python, 20 designs: max relative difference {worst:.2e}")
+
+
+def test_explore_refuses_an_unsealed_or_non_predictor_model(tmp_path, capsys):
+    import shutil
+
+    from conftest import REPO
+
+    from hapticrom.cli import main
+
+    unsealed = tmp_path / "nn"
+    shutil.copytree(REPO / "models/nn-default", unsealed)
+    card = json.loads((unsealed / "card.json").read_text())
+    card.pop("card_sha256", None)
+    (unsealed / "card.json").write_text(json.dumps(card))
+    site = tmp_path / "site"
+    assert main(["explore", str(unsealed), "--build-only", "--out", str(site)]) == 2
+    assert "card_sha256" in capsys.readouterr().err
+    from conftest import seal_copy
+
+    rom = seal_copy("rom-default", tmp_path)
+    assert main(["explore", str(rom), "--build-only", "--out", str(site)]) == 2
+    assert "'rom' model" in capsys.readouterr().err
+    assert not site.exists()  # nothing written
+
+
+def test_explore_builds_once_then_reuses(node, sealed, tmp_path, capsys):
+    from hapticrom.cli import main
+
+    site = tmp_path / "site"
+    assert main(["explore", str(sealed["nn-default"]), "--build-only", "--out", str(site)]) == 0
+    stamp = (site / "build.json").stat().st_mtime_ns
+    assert sorted(p.name for p in (site / "model").iterdir()) == ["card.json", "model.onnx"]
+    assert (site / "ort" / "ort-wasm-simd-threaded.wasm").is_file()
+    assert main(["explore", str(sealed["nn-default"]), "--build-only", "--out", str(site)]) == 0
+    assert (site / "build.json").stat().st_mtime_ns == stamp  # up to date: not rebuilt
+    assert not (tmp_path / "site.building").exists()

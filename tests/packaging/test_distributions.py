@@ -5,6 +5,7 @@ load a model by name and answer exactly as the source tree does, and the planner
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -28,8 +29,12 @@ DESIGNS = {"orientation": ["forward", "reverse", "forward"], "attachment": ["glu
            "frequency_hz": [200.0, 120.0, 240.0]}
 
 
+# offline with this environment's setuptools; a venv without it (Python >= 3.12) fetches one
+ISOLATION = [] if importlib.util.find_spec("setuptools") is None else ["--no-build-isolation"]
+
+
 def _wheel(dist: str, out: Path) -> Path:
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", *ISOLATION,
                     "--quiet", "-w", str(out), str(REPO / "packaging" / dist)], check=True)
     return next(out.glob(f"hapticrom_{dist}-*.whl"))
 
