@@ -118,3 +118,23 @@ def test_node_refuses_a_damaged_model(node, sealed, tmp_path, damage):
     got = json.loads(run.stderr.splitlines()[-1])
     assert got["error"] == "ModelFileError"
     assert got["field"] in {"card_sha256", "files"}
+
+
+def test_js_canonical_json_is_pythons(node, tmp_path):
+    """The card digest's canonical text, rebuilt in JS from the file's literals, equals
+    Python's json.dumps(sort_keys, compact, ensure_ascii=False) for awkward values."""
+    card = {"format": "hapticrom-model", "z": [1e-05, 0.0001, 1e16, 9999999999999998.0,
+            1.5e300, -0.0, 0.1 + 0.2, 3.0, 6.550000000000001, -2.5e-310],
+            "ints": [0, -3, 123456789012345678901234567890], "é": "ünï\u2028\"\\\n\t\x01",
+            "a": {"b": True, "c": None, "B": False, "\U0001f600": "astral", "\uffff": 1},
+            "card_sha256": "ignored"}
+    src = tmp_path / "card.json"
+    src.write_text(json.dumps(card, indent=2, ensure_ascii=False), encoding="utf-8")
+    js = ("import { canonicalCardText } from './lib/hapticrom-model.mjs';"
+          "import { readFileSync } from 'node:fs';"
+          "process.stdout.write(canonicalCardText(readFileSync(process.argv[1], 'utf8')));")
+    run = subprocess.run([node, "--input-type=module", "-e", js, str(src)], cwd=EMBED,
+                         capture_output=True, timeout=60, check=True)
+    want = json.dumps({k: v for k, v in card.items() if k != "card_sha256"}, sort_keys=True,
+                      separators=(",", ":"), ensure_ascii=False)
+    assert run.stdout.decode("utf-8") == want
