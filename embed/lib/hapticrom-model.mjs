@@ -135,6 +135,10 @@ export function canonicalCardText(cardText) {
 /** Lower-case hex sha256 of bytes (Uint8Array) or of a string's UTF-8 encoding. */
 export async function sha256Hex(data) {
   const bytes = typeof data === "string" ? new TextEncoder().encode(data) : data;
+  if (!globalThis.crypto?.subtle) {
+    throw new ModelFileError("card_sha256", "WebCrypto is not available, so the model cannot " +
+      "be verified: serve the page from localhost or over https (Node >= 19 has it)");
+  }
   const digest = await globalThis.crypto.subtle.digest("SHA-256", bytes);
   return Array.from(new Uint8Array(digest), (b) => b.toString(16).padStart(2, "0")).join("");
 }
@@ -168,13 +172,6 @@ export async function verifyModel(cardText, files, { present = null } = {}) {
   if (listed === null || typeof listed !== "object" || Object.keys(listed).length === 0) {
     throw new ModelFileError("files", "card.json: the card lists no files");
   }
-  if (present !== null) {
-    const extra = present.filter((n) => n !== "card.json" && !(n in listed)).sort();
-    if (extra.length) {
-      throw new ModelFileError("files", `file '${extra[0]}' is not listed in the card ` +
-        "(refusing a directory that was changed)");
-    }
-  }
   for (const [name, digest] of Object.entries(listed)) {
     if (!plainName(name)) throw new ModelFileError("files", `listed file '${name}' is not a plain file name`);
     if (!(name in files)) throw new ModelFileError("files", `listed file '${name}' is missing`);
@@ -182,6 +179,13 @@ export async function verifyModel(cardText, files, { present = null } = {}) {
     if (got !== digest) {
       throw new ModelFileError("files", `${name}: sha256 ${got.slice(0, 12)}... does not match ` +
         `the card's ${String(digest).slice(0, 12)}... (file changed)`);
+    }
+  }
+  if (present !== null) {
+    const extra = present.filter((n) => n !== "card.json" && !(n in listed)).sort();
+    if (extra.length) {
+      throw new ModelFileError("files", `file '${extra[0]}' is not listed in the card ` +
+        "(refusing a directory that was changed)");
     }
   }
   return card;
