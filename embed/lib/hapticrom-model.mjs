@@ -11,6 +11,7 @@
 //   out.center_amplitude_um[0], out.profile_um[0], out.profile_distance_mm
 
 export const FORMAT = "hapticrom-model";
+export const CARD_VERSION = 1;
 export const Z95 = 1.959964; // two-sided 95 % normal quantile (the planner's band, too)
 
 /** A model directory that is malformed or fails its integrity check; `field` names the key. */
@@ -159,6 +160,10 @@ export async function verifyModel(cardText, files, { present = null } = {}) {
   }
   if (card === null || typeof card !== "object" || card.format !== FORMAT) {
     throw new ModelFileError("format", `card.json: not a ${FORMAT} card`);
+  }
+  if (card.card_version !== CARD_VERSION) {
+    throw new ModelFileError("card_version", `card.json: card_version ${card.card_version} is not ` +
+      `${CARD_VERSION}, the version this reader knows`);
   }
   if (typeof card.card_sha256 !== "string") {
     throw new ModelFileError("card_sha256", "card.json: the card is not sealed (no card_sha256)");
