@@ -60,6 +60,8 @@ try {
         normalized_edge: num("ratio"), edge_radius_mm: num("radius"),
         profile_um: o?.profile_um[0], profile_um_low95: o?.profile_um_low95[0],
         profile_um_high95: o?.profile_um_high95[0],
+        array: { ...ex.state.array, neighbour_um: num("arr-neighbour"),
+          worst_leakage: num("arr-crosstalk") },
       };
     }, d));
   }

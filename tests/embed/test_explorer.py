@@ -78,6 +78,24 @@ def test_page_numbers_equal_the_python_predictor(page):
     print(f"explorer vs Python, 20 designs: max relative difference {worst:.2e}")
 
 
+def test_array_preview_follows_the_planner(page):
+    """The page's neighbour amplitude and worst leakage are the planner's crosstalk rules
+    (planner/crosstalk.py) applied to the page's own predicted profile."""
+    from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+
+    result, _, predictor, _ = page
+    for got in result["designs"]:
+        a = got["array"]
+        field = UnitField(got["center_amplitude_um"], got["edge_radius_mm"],
+                          predictor.profile_distance_mm, np.asarray(got["profile_um"]))
+        pitch = max(a["pitch"], 2 * got["edge_radius_mm"])
+        C = crosstalk_matrix(field, site_positions(a["rows"], a["cols"], pitch, a["grid"]))
+        np.testing.assert_allclose(a["neighbour_um"], field.amplitude(np.array([pitch]))[0],
+                                   rtol=1e-9)
+        np.testing.assert_allclose(a["worst_leakage"], leakage_ratio(C, "incoherent").max(),
+                                   rtol=1e-9)
+
+
 def test_explore_refuses_an_unsealed_or_non_predictor_model(tmp_path, capsys):
     import shutil
 
