@@ -71,7 +71,10 @@ print(json.dumps({"import_ms": 1e3 * (t1 - t0), "load_ms": 1e3 * (t2 - t1),
 
 def build_wheels(out: Path) -> list[Path]:
     """The two run-time wheels, built from packaging/ into ``out``."""
-    isolation = [] if importlib.util.find_spec("setuptools") is None else ["--no-build-isolation"]
+    can_build = (importlib.util.find_spec("setuptools") is not None
+                 and (importlib.util.find_spec("setuptools.command.bdist_wheel") is not None
+                      or importlib.util.find_spec("wheel") is not None))
+    isolation = ["--no-build-isolation"] if can_build else []
     for dist in ("runtime", "models"):
         subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet",
                         *isolation, "-w", str(out), str(REPO / "packaging" / dist)], check=True)

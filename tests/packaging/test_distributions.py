@@ -29,8 +29,12 @@ DESIGNS = {"orientation": ["forward", "reverse", "forward"], "attachment": ["glu
            "frequency_hz": [200.0, 120.0, 240.0]}
 
 
-# offline with this environment's setuptools; a venv without it (Python >= 3.12) fetches one
-ISOLATION = [] if importlib.util.find_spec("setuptools") is None else ["--no-build-isolation"]
+# offline with this environment's setuptools when it can build wheels by itself (>= 70.1, or
+# with the wheel package); otherwise pip fetches a build environment
+_CAN_BUILD = (importlib.util.find_spec("setuptools") is not None
+              and (importlib.util.find_spec("setuptools.command.bdist_wheel") is not None
+                   or importlib.util.find_spec("wheel") is not None))
+ISOLATION = ["--no-build-isolation"] if _CAN_BUILD else []
 
 
 def _wheel(dist: str, out: Path) -> Path:
