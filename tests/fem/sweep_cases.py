@@ -36,7 +36,7 @@ def space_designs(n: int, n_light_pogo: int, seed: int = 7) -> list[tuple[str, S
     """``n`` designs of ``datasets/spaces/default.toml`` (its Sobol sequence from ``seed``
     x 64), the last ``n_light_pogo`` of them forced to pogo pins with three rings of loss
     factor 0.02-0.03: the lightly damped units whose centre has sharp antiresonances."""
-    from surrogate.data.space import load_space  # noqa: PLC0415  (tests only)
+    from surrogate.data.space import load_space
 
     space = load_space(ROOT / "datasets" / "spaces" / "default.toml")
     pts = space.points(seed * 64, n)
