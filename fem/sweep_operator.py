@@ -260,11 +260,10 @@ class CondensedSolver:
     factorisation of the operator condensed to the element boundaries (exact: each interior
     node belongs to one element)."""
 
-    full: DofMap
-    boundary: DofMap
-    to_full: NDArray  # (n_b,) free index in ``full`` of each boundary free dof
-    interior: NDArray  # (ne, nc) free index in ``full`` of each element's interior dofs
-    outer_dofs: NDArray  # (ne, nb) full dof indices of each element's boundary dofs
+    n_free: int
+    to_full: NDArray  # (n_b,) free index in the uncondensed map of each boundary free dof
+    interior: NDArray  # (ne, nc) free index in the uncondensed map of each element's interior
+    outer: ElementGroup  # element boundary dofs on the condensed map (gather / scatter)
     recover: NDArray  # (ne, nc, nb): u_c = Zcc^-1 f_c + recover u_b
     lift: NDArray  # (ne, nb, nc): Z_bc Zcc^-1, moves interior loads to the boundary
     inverse_cc: NDArray  # (ne, nc, nc)
@@ -285,7 +284,8 @@ class CondensedSolver:
         edofs = full.element_dofs
         if inner.size:
             Zb, outer, recover = condense(Z, inner)
-            inverse_cc = small_inverse(Z[:, inner[0]:inner[-1] + 1, inner[0]:inner[-1] + 1])
+            block = slice(int(inner[0]), int(inner[-1]) + 1)
+            inverse_cc = small_inverse(Z[:, block, block])
             lift = np.matmul(Z[:, outer][:, :, inner], inverse_cc)
         else:
             Zb, outer = Z, np.arange(Z.shape[1])
@@ -297,30 +297,26 @@ class CondensedSolver:
         masters = np.flatnonzero((boundary.master >= 0) & (boundary.coef == 1.0))
         to_full = np.empty(boundary.n_free, dtype=int)
         to_full[boundary.master[masters]] = full.master[masters]
-        interior = full.master[edofs[:, inner]] if inner.size else np.empty((mesh.n_elements, 0),
-                                                                             dtype=int)
-        return cls(full, boundary, to_full, interior, outer_dofs, recover, lift, inverse_cc,
-                   factor)
+        interior = (full.master[edofs[:, inner]] if inner.size
+                    else np.empty((mesh.n_elements, 0), dtype=int))
+        return cls(full.n_free, to_full, interior,
+                   ElementGroup.build(boundary, outer_dofs, np.empty(0)), recover, lift,
+                   inverse_cc, factor)
 
     def solve(self, f: NDArray) -> NDArray:
         """x with A x = f; ``f`` and x (n_free,) or (n_free, k) on the uncondensed free dofs."""
         f = np.asarray(f, dtype=complex)
-        single = f.ndim == 1
-        F = f[:, None] if single else f
+        F = f[:, None] if f.ndim == 1 else f
+        k = F.shape[1]
         Fb = F[self.to_full]
-        if self.interior.shape[1]:
+        condensed = self.interior.shape[1] > 0
+        if condensed:
             Fc = F[self.interior]  # (ne, nc, k)
-            moved = -np.matmul(self.lift, Fc)  # (ne, nb, k)
-            rows, coefs = self.boundary.master[self.outer_dofs], self.boundary.coef[
-                self.outer_dofs]
-            keep = rows >= 0
-            np.add.at(Fb, rows[keep], (coefs[..., None] * moved)[keep])
-        Ub = self.factor.solve(Fb)
-        Ub = Ub.reshape(Fb.shape)
-        X = np.zeros((self.full.n_free, F.shape[1]), dtype=complex)
+            Fb = Fb - self.outer.gather.T @ np.matmul(self.lift, Fc).reshape(-1, k)
+        Ub = self.factor.solve(Fb).reshape(Fb.shape)
+        X = np.zeros((self.n_free, k), dtype=complex)
         X[self.to_full] = Ub
-        if self.interior.shape[1]:
-            U_full = self.boundary.expand(Ub)  # (n_full, k)
+        if condensed:
             X[self.interior] = (np.matmul(self.inverse_cc, Fc)
-                                + np.matmul(self.recover, U_full[self.outer_dofs]))
-        return X[:, 0] if single else X
+                                + np.matmul(self.recover, self.outer.local(Ub)))
+        return X[:, 0] if f.ndim == 1 else X
