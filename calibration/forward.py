@@ -87,8 +87,13 @@ class ForwardModel:
         self.rel_sigma = np.array([p.relative_sigma for p in pts])
         grid_mm = np.asarray(predictor.profile_distance_mm, dtype=float)
         self.grid_m = grid_mm * 1e-3
-        template = self._rows(np.array([[predictor.input_ranges[n][0] for n in self.fit]]))
+        theta_lo = np.array([[predictor.input_ranges[n][0] for n in self.fit]])
+        template = self._rows(theta_lo)
         out = predictor.predict(template)
+        names = list(predictor.input_names)
+        self._template = predictor.features(self._rows(theta_lo[:1]))[0][:1].copy()
+        self._fit_cols = [names.index(n) for n in self.fit]
+        self._freq_col = names.index("frequency_hz") if "frequency_hz" in names else None
         self.edge_radius_m = float(out["edge_radius_mm"][0]) * 1e-3
         available = tuple(out)
         lo_f, hi_f = predictor.input_ranges.get("frequency_hz", (-np.inf, np.inf))
@@ -136,14 +141,27 @@ class ForwardModel:
                 np.array([i[2] for i in items]), np.array([i[3] for i in items])))
 
     def _rows(self, theta: np.ndarray) -> dict[str, np.ndarray]:
-        """Predictor inputs: one row per (parameter vector, frequency), frequency fastest."""
+        """Predictor inputs by name: one row per (parameter vector, frequency), frequency
+        fastest (the first call, which also finds the model's codes of the fixed inputs)."""
         n, nf = theta.shape[0], self.frequencies_hz.size
         X: dict[str, np.ndarray] = {k: np.full(n * nf, v) if not isinstance(v, str)
                                     else np.array([v] * (n * nf)) for k, v in self.fixed.items()}
         for j, name in enumerate(self.fit):
             X[name] = np.repeat(theta[:, j], nf)
-        X["frequency_hz"] = np.tile(self.frequencies_hz, n)
+        if "frequency_hz" in self.predictor.input_names:
+            X["frequency_hz"] = np.tile(self.frequencies_hz, n)
         return X
+
+    def _codes(self, theta: np.ndarray) -> np.ndarray:
+        """The same rows as the (n * n_f, d) code array of the predictor's inputs (fixed
+        inputs coded once), which the predictor checks and encodes without per-name work."""
+        n, nf = theta.shape[0], self.frequencies_hz.size
+        codes = np.repeat(self._template, n * nf, axis=0)
+        for j, col in enumerate(self._fit_cols):
+            codes[:, col] = np.repeat(theta[:, j], nf)
+        if self._freq_col is not None:
+            codes[:, self._freq_col] = np.tile(self.frequencies_hz, n)
+        return codes
 
     def predict(self, theta: np.ndarray, *, extrapolate: bool = False
                 ) -> tuple[np.ndarray, np.ndarray]:
@@ -151,7 +169,7 @@ class ForwardModel:
         ``theta`` (n, len(fit)) in the model's units."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         n, nf = theta.shape[0], self.frequencies_hz.size
-        out = self.predictor.predict(self._rows(theta), extrapolate=extrapolate)
+        out = self.predictor.predict(self._codes(theta), extrapolate=extrapolate)
         mean = np.empty((n, self.y.size))
         std = np.empty((n, self.y.size))
         for g in self.groups:

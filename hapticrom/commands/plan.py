@@ -28,7 +28,13 @@ def _run(args: argparse.Namespace) -> int:
     for opt in ("out", "plot"):
         if getattr(args, opt):
             check_output_file(f"--{opt}", getattr(args, opt))
-    plan = plan_layout(load_layout(args.layout))
+    req, tissue = load_layout(args.layout), None
+    if args.tissue:
+        from planner.tissue import apply_tissue, load_tissue
+
+        tissue = load_tissue(args.tissue)
+        req = apply_tissue(req, tissue)
+    plan = plan_layout(req)
     verify = _verify(plan) if args.verify and plan.best is not None else None
     req = plan.request
     crit = req.criterion
@@ -69,12 +75,15 @@ def _run(args: argparse.Namespace) -> int:
                                            f"{k} = {v}" for k, v in plan.best.inputs.items()))
         _print_uncertainty(plan)
         _print_timing(plan.timing)
+    spread = _print_tissue(plan, tissue) if tissue is not None else None
     if verify is not None:
         _print_verify(verify)
     if args.out:
         doc = plan_to_dict(plan)
         if args.verify:
             doc["verify"] = verify
+        if tissue is not None:
+            doc["tissue"] = spread
         with atomic_path(args.out) as tmp:
             tmp.write_text(json.dumps(doc, indent=1) + "\n")
         print(f"wrote {args.out}")
@@ -158,6 +167,27 @@ def _print_uncertainty(plan: object) -> None:
           f"{' [extrapolated]' if u['extrapolated'] else ''}")
 
 
+def _print_tissue(plan: Any, tissue: Any) -> dict[str, Any] | None:
+    """The calibrated tissue and the chosen design's pitch over its posterior draws."""
+    from planner.tissue import posterior_pitch
+
+    print(f"  tissue from {tissue.path}: " + ", ".join(
+        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
+        for k, v in tissue.point.items()))
+    s = posterior_pitch(plan, tissue)
+    if s is None:
+        return None
+
+    def mm(x: float | None) -> str:
+        return "infeasible" if x is None else f"{x:.2f} mm"
+
+    print(f"  pitch over {s['draws']} posterior draws: median {mm(s['pitch_mm_median'])}, 95 % "
+          f"[{mm(s['pitch_mm_2_5'])}, {mm(s['pitch_mm_97_5'])}]; at the posterior's 95 % bound "
+          f"{mm(s['pitch_95_mm'])}, with the surrogate's 95 % bounds too "
+          f"{mm(s['pitch_95_with_surrogate_mm'])}")
+    return s
+
+
 def _print_timing(timing: dict | None) -> None:
     if timing is None:
         return
@@ -181,4 +211,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--verify", action="store_true",
                    help="re-solve the winning design with the FE solver (about a second) and "
                    "compare it with the surrogate (written into the plan under 'verify')")
+    p.add_argument("--tissue", metavar="CALIBRATION",
+                   help="plan for a person: the tissue of a `hapticrom calibrate` document, its "
+                   "posterior uncertainty carried into the pitch (planner.tissue)")
     p.set_defaults(func=_run)
