@@ -25,10 +25,12 @@ __all__ = ["KIND", "SCHEMA_VERSION", "CalibrationFileError", "Tissue", "calibrat
 
 KIND = "hapticrom.calibration"
 SCHEMA_VERSION = 1
-LIKELIHOOD = ("ln y_i ~ N(ln mu_i(theta), (sigma_i/y_i)^2 + (k s_i(theta))^2): y_i the measured "
-              "peak displacement amplitude, sigma_i its stated standard uncertainty, mu_i the "
-              "surrogate's prediction, s_i its predictive log-std (95 % bounds exp(+-1.96 s)), "
-              "k the surrogate's std factor")
+LIKELIHOOD = ("ln y ~ N(ln mu(theta), diag((sigma_i/y_i)^2) + k^2 diag(s) C diag(s)): y the "
+              "measured peak displacement amplitudes, sigma_i their stated standard "
+              "uncertainties, mu the surrogate's prediction, s its predictive log-std (95 % "
+              "bounds exp(+-1.96 s)), k the surrogate's std factor, C the correlation of its "
+              "errors: exp(-|d_i - d_j| / error_length_mm) along the profile times "
+              "exp(-|f_i - f_j| / error_frequency_hz), none between the face and the profile")
 
 
 class CalibrationFileError(FieldError):
@@ -84,7 +86,9 @@ def calibration_document(cal: Calibration, *, model_path: str, tissue_names: lis
         "fit": list(cal.names),
         "fixed": cal.forward.fixed,
         "priors": {p.name: p.to_dict() for p in cal.priors},
-        "likelihood": {"text": LIKELIHOOD, "surrogate_std_factor": _r(cal.std_factor, 4)},
+        "likelihood": {"text": LIKELIHOOD, "surrogate_std_factor": _r(cal.std_factor, 4),
+                       "error_length_mm": cal.error_length_mm,
+                       "error_frequency_hz": cal.error_frequency_hz},
         "sampler": {k: (_r(v, 4) if isinstance(v, float) else
                         [_r(x, 4) for x in v] if isinstance(v, list) else v)
                     for k, v in cal.sampler.items()},

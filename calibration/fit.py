@@ -4,11 +4,14 @@ emcee's ensemble sampler on the run-time surrogate.
 Likelihood (docs/calibration.md): each measured amplitude y_i (peak displacement [m], converted
 by :mod:`calibration.measurement`) is log-normal about the surrogate's prediction mu_i(theta),
 
-    ln y_i ~ N(ln mu_i(theta), (sigma_i / y_i)^2 + (k s_i(theta))^2),
+    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s(theta)) C diag(s(theta))),
 
-with sigma_i the stated standard uncertainty and s_i the surrogate's own predictive log-std
-(its 95 % bounds are exp(+-1.96 s)), widened by ``k`` = :func:`surrogate_std_factor` where
-the model card's held-out coverage shows the bounds too narrow. Priors: :mod:`calibration.priors`.
+with sigma_i the stated standard uncertainty (independent between points), s_i the
+surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened by ``k`` =
+:func:`surrogate_std_factor` where the model card's held-out coverage shows the bounds too
+narrow, and C the correlation of the surrogate's errors between points
+(:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
+too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
 
 Sampling: ``walkers`` walkers started at the best of ``n_init`` prior draws (one vectorised
 surrogate call), differential-evolution moves (emcee's DEMove 0.8 / DESnookerMove 0.2: robust
@@ -38,6 +41,10 @@ __all__ = ["IDENTIFIABLE_WIDTH_RATIO", "Calibration", "calibrate", "surrogate_st
 IDENTIFIABLE_WIDTH_RATIO = 0.8
 Z95 = 1.959964
 KEPT_SAMPLES = 400  # posterior draws stored in the calibration document
+#: correlation of the surrogate's errors along the profile [mm] and across frequencies [Hz]
+#: (measured by bench/bench_calibration.py --residuals on FE solves apart from the study's)
+ERROR_LENGTH_MM = 20.0
+ERROR_FREQUENCY_HZ = 60.0
 
 
 def surrogate_std_factor(card: Mapping[str, Any]) -> float:
@@ -66,6 +73,8 @@ class Calibration:
     log_prob: np.ndarray  # (n,)
     std_factor: float
     sampler: dict[str, Any] = field(default_factory=dict)
+    error_length_mm: float = ERROR_LENGTH_MM
+    error_frequency_hz: float = ERROR_FREQUENCY_HZ
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -115,15 +124,25 @@ class Calibration:
 
 
 def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
-                    k: float) -> np.ndarray:
-    var = rel ** 2 + (k * std) ** 2
-    return -0.5 * np.sum((y - mean) ** 2 / var + np.log(2 * np.pi * var), axis=1)
+                    k: float, corr: np.ndarray) -> np.ndarray:
+    """Gaussian log-likelihood of ln y for each row of ``mean``/``std`` (n, m): covariance
+    diag(rel^2) + k^2 diag(std) corr diag(std), one batched Cholesky factorisation."""
+    ks = k * std
+    cov = ks[:, :, None] * corr[None, :, :] * ks[:, None, :]
+    cov[:, np.arange(y.size), np.arange(y.size)] += rel ** 2
+    chol = np.linalg.cholesky(cov)
+    r = (y - mean)[:, :, None]
+    w = np.linalg.solve(chol, r)[:, :, 0]
+    logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
+    return -0.5 * (np.sum(w ** 2, axis=1) + logdet + y.size * np.log(2 * np.pi))
 
 
 def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
               walkers: int = 32, steps: int = 1500, burn: int = 500, n_init: int = 4096,
-              seed: int = 0, std_factor: float | None = None) -> Calibration:
+              seed: int = 0, std_factor: float | None = None,
+              error_length_mm: float = ERROR_LENGTH_MM,
+              error_frequency_hz: float = ERROR_FREQUENCY_HZ) -> Calibration:
     """Sample the posterior of the inputs ``fit`` (model input names) given ``measurement``.
 
     Inputs not fitted come from ``fixed``, then the measurement's ``site`` and ``design``
@@ -149,6 +168,7 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     fwd = ForwardModel(predictor, measurement, [p.name for p in prs], given)
     k = surrogate_std_factor(predictor.card) if std_factor is None else std_factor
     y, rel = fwd.y, fwd.rel_sigma
+    corr = fwd.error_correlation(error_length_mm, error_frequency_hz)
 
     def log_post(z: np.ndarray) -> np.ndarray:
         z = np.atleast_2d(z)
@@ -158,7 +178,7 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
         if ok.any():
             x = np.column_stack([p.from_z(z[ok, j]) for j, p in enumerate(prs)])
             mean, std = fwd.predict(x)
-            out[ok] = lp[ok] + _log_likelihood(mean, std, y, rel, k)
+            out[ok] = lp[ok] + _log_likelihood(mean, std, y, rel, k, corr)
         return out
 
     rng = np.random.default_rng(seed)
@@ -185,4 +205,5 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
             "autocorr_steps": [float(t) for t in tau],
             "effective_samples": float(walkers * (steps - burn) / max(np.nanmax(tau), 1.0)),
             "wall_s": time.perf_counter() - t0}
-    return Calibration(measurement, fwd, prs, samples, lps, k, info)
+    return Calibration(measurement, fwd, prs, samples, lps, k, info, error_length_mm,
+                       error_frequency_hz)

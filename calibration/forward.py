@@ -140,6 +140,23 @@ class ForwardModel:
                 c_out, p_out, np.array([i[0] for i in items]), np.array([i[1] for i in items]),
                 np.array([i[2] for i in items]), np.array([i[3] for i in items])))
 
+    def error_correlation(self, length_mm: float, frequency_scale_hz: float) -> np.ndarray:
+        """(m, m) correlation of the surrogate's errors between the measured points: along
+        the profile exp(-|d_i - d_j| / length_mm), between frequencies
+        exp(-|f_i - f_j| / frequency_scale_hz), none between the unit's face and the profile
+        (see docs/calibration.md for how these were measured)."""
+        m = self.y.size
+        d = np.zeros(m)
+        face = np.zeros(m, dtype=bool)
+        f = np.array([p.frequency_hz for p in self.measurement.points])
+        for g in self.groups:
+            d[g.index] = g.weights @ (self.grid_m * 1e3)
+            face[g.index] = g.centre
+        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length_mm)
+        same = face[:, None] == face[None, :]
+        rho = np.where(same, np.where(face[:, None], 1.0, rho_d), 0.0)
+        return rho * np.exp(-np.abs(f[:, None] - f[None, :]) / frequency_scale_hz)
+
     def _rows(self, theta: np.ndarray) -> dict[str, np.ndarray]:
         """Predictor inputs by name: one row per (parameter vector, frequency), frequency
         fastest (the first call, which also finds the model's codes of the fixed inputs)."""

@@ -46,28 +46,30 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
     r_edge_mm = cal.forward.edge_radius_m * 1e3
     radius = np.array([0.0 if t[2] == "centre" else r_edge_mm + t[3] for t in tags])
     fig, ax = figstyle.figure(width_in=6.4, height_in=4.6)
-    keys = sorted({(t[0], t[1]) for t in tags})
-    for i, (f, comp) in enumerate(keys):
-        c = figstyle.color(i)
-        sel = np.array([(t[0], t[1]) == (f, comp) and t[2] == "edge" for t in tags])
-        face = np.array([(t[0], t[1]) == (f, comp) and t[2] == "centre" for t in tags])
-        ax.fill_between(radius[sel], lo[sel], hi[sel], color=c, alpha=0.25, lw=0)
-        ax.plot(radius[sel], mid[sel], color=c, lw=1.2,
-                label=f"{f:g} Hz {comp}: posterior predictive median, 95 % band")
-        ax.errorbar([0.0], mid[face], yerr=[mid[face] - lo[face], hi[face] - mid[face]],
-                    color=c, fmt="_", ms=14, capsize=0, lw=6, alpha=0.35)
-        pts = [p for p in cal.measurement.points if (p.frequency_hz, p.component) == (f, comp)]
-        r = [p.distance_m * 1e3 + (r_edge_mm if p.reference == "edge" else 0.0) for p in pts]
-        a = np.array([p.amplitude_m for p in pts]) * 1e6
-        s = np.array([p.sigma_m for p in pts]) * 1e6
-        ax.errorbar(r, a, yerr=Z95 * s, fmt="o", color=c, ms=4, capsize=2,
-                    label=f"{f:g} Hz {comp}: measured (95 % of stated uncertainty)")
-    ax.axvspan(0.0, r_edge_mm, color="0.85", alpha=0.5, lw=0)
-    ax.set_yscale("log")
-    ax.set_xlabel("distance from the unit's centre [mm] (grey: under the unit; 0: its face)")
-    ax.set_ylabel("peak displacement amplitude [um]")
-    ax.legend(loc="lower left")
-    figstyle.plain_log_ticks(ax)
+    with figstyle.style():
+        keys = sorted({(t[0], t[1]) for t in tags})
+        for i, (f, comp) in enumerate(keys):
+            c = figstyle.color(i)
+            sel = np.array([(t[0], t[1]) == (f, comp) and t[2] == "edge" for t in tags])
+            face = np.array([(t[0], t[1]) == (f, comp) and t[2] == "centre" for t in tags])
+            ax.fill_between(radius[sel], lo[sel], hi[sel], color=c, alpha=0.25, lw=0)
+            ax.plot(radius[sel], mid[sel], color=c, lw=1.2,
+                    label=f"{f:g} Hz {comp}: calibrated model, 95 % band")
+            ax.errorbar([0.0], mid[face], yerr=[mid[face] - lo[face], hi[face] - mid[face]],
+                        color=c, fmt="_", ms=14, capsize=0, lw=6, alpha=0.35)
+            pts = [p for p in cal.measurement.points
+                   if (p.frequency_hz, p.component) == (f, comp)]
+            r = [p.distance_m * 1e3 + (r_edge_mm if p.reference == "edge" else 0.0) for p in pts]
+            a = np.array([p.amplitude_m for p in pts]) * 1e6
+            s = np.array([p.sigma_m for p in pts]) * 1e6
+            ax.errorbar(r, a, yerr=Z95 * s, fmt="o", color=c, ms=4, capsize=2,
+                        label=f"{f:g} Hz {comp}: measured, +-1.96 sigma")
+        ax.axvspan(0.0, r_edge_mm, color="0.85", alpha=0.5, lw=0)
+        ax.set_yscale("log")
+        ax.set_xlabel("distance from the unit's centre [mm] (grey: under the unit; 0: its face)")
+        ax.set_ylabel("peak displacement amplitude [um]")
+        ax.legend(loc="upper right")
+        figstyle.plain_log_ticks(ax)
     summary = cal.summary(seed)
     fitted = "; ".join(f"{n} {s['mean']:.3g} [{s['ci95'][0]:.3g}, {s['ci95'][1]:.3g}]"
                        + ("" if s["identifiable"] else " (not determined)")
