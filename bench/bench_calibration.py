@@ -37,7 +37,7 @@ NOISES = (0.05, 0.10)
 
 
 def run(subjects: list[dict], predictor, *, component: str = "magnitude",
-        steps: int = 1500, std_factor: float | None = None, quiet: bool = False
+        steps: int = 1000, std_factor: float | None = None, quiet: bool = False
         ) -> list[dict]:
     """One record per (subject, noise): truth, posterior summary, run time."""
     records = []
@@ -136,7 +136,7 @@ def main() -> None:
     ap.add_argument("--component", default="magnitude", choices=("magnitude", "normal"),
                     help="what the synthetic sensor sees (normal: needs a model with a "
                     "normal-component output)")
-    ap.add_argument("--steps", type=int, default=1500)
+    ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--std-factor", type=float, default=None)
     ap.add_argument("--json", type=Path, help="write the records")
     ap.add_argument("--residuals", action="store_true",

@@ -47,8 +47,7 @@ EXAMPLE_DISTANCES_MM = (1.0, 3.0, 5.0, 8.0, 11.0, 15.0)  # from the unit's edge
 
 def write_example(space, seed: int) -> None:
     """examples/measurement-forearm.csv from one FE-solved subject."""
-    from calibration.measurement import from_amplitude_m, measurement_from_rows, \
-        write_measurement
+    from calibration.measurement import from_amplitude_m, measurement_from_rows, write_measurement
 
     rec = solve(EXAMPLE, space)
     rng = np.random.default_rng(seed)

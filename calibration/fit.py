@@ -139,7 +139,7 @@ def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.nd
 
 def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
-              walkers: int = 32, steps: int = 1500, burn: int = 500, n_init: int = 4096,
+              walkers: int = 32, steps: int = 1000, burn: int = 333, n_init: int = 4096,
               seed: int = 0, std_factor: float | None = None,
               error_length_mm: float = ERROR_LENGTH_MM,
               error_frequency_hz: float = ERROR_FREQUENCY_HZ) -> Calibration:

@@ -87,11 +87,15 @@ class ForwardModel:
         self.rel_sigma = np.array([p.relative_sigma for p in pts])
         grid_mm = np.asarray(predictor.profile_distance_mm, dtype=float)
         self.grid_m = grid_mm * 1e-3
-        theta_lo = np.array([[predictor.input_ranges[n][0] for n in self.fit]])
-        template = self._rows(theta_lo)
+        # one row at the low end of every fitted range (and of the frequency range): the edge
+        # radius, the output names and the codes of the fixed inputs
+        template = {k: v[:1] for k, v in self._rows(
+            np.array([[predictor.input_ranges[n][0] for n in self.fit]])).items()}
+        if "frequency_hz" in template:
+            template["frequency_hz"] = np.array([predictor.input_ranges["frequency_hz"][0]])
         out = predictor.predict(template)
         names = list(predictor.input_names)
-        self._template = predictor.features(self._rows(theta_lo[:1]))[0][:1].copy()
+        self._template = predictor.features(template)[0]
         self._fit_cols = [names.index(n) for n in self.fit]
         self._freq_col = names.index("frequency_hz") if "frequency_hz" in names else None
         self.edge_radius_m = float(out["edge_radius_mm"][0]) * 1e-3

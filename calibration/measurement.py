@@ -252,20 +252,17 @@ def read_measurement(path: str | Path) -> Measurement:
                                + (f"column {missing[0]!r} is missing" if missing else
                                   f"unknown column {unknown[0]!r}")
                                + f" (the columns are {', '.join(COLUMNS)})")
-    recs = []
+    pts: list[MeasuredPoint] = []
     for number, line in body[1:]:
         cells = next(csv.reader([line]))
         if len(cells) != len(header):
             errors.append((f"row {number}", f"row {number}: {len(cells)} cells, expected "
                            f"{len(header)} ({','.join(header)})"))
             continue
-        recs.append((number, dict(zip(header, cells, strict=True))))
-    pts: list[MeasuredPoint] = []
-    for number, rec in recs:
-        p = _point(rec, number, errors)
+        p = _point(dict(zip(header, cells, strict=True)), number, errors)
         if p is not None:
             pts.append(p)
-    if not recs and not errors:
+    if len(body) == 1 and not errors:
         errors.append(("rows", "no measurement rows under the header"))
     _raise(errors, str(path))
     return Measurement(tuple(pts), design, site, meta, str(path))

@@ -42,8 +42,6 @@ def _sets(items: list[str]) -> dict[str, Any]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import numpy as np
-
     from calibration import calibrate, calibration_document, read_measurement
     from surrogate.runtime import load_predictor
 
@@ -73,15 +71,15 @@ def _run(args: argparse.Namespace) -> int:
         with atomic_path(args.plot) as tmp:
             write_calibration_plot(cal, tmp, seed=args.seed)
         print(f"wrote {args.plot}")
-    del np
     return 0
 
 
 def _print(doc: dict[str, Any], n_points: int) -> None:
     s = doc["sampler"]
-    print(f"{n_points} measured points at {len({p['frequency_hz'] for p in doc['measurement']['points']})} "
-          f"frequencies, model {doc['model']['name']} (surrogate spread x"
-          f"{doc['likelihood']['surrogate_std_factor']:g}); emcee {s['walkers']} walkers x "
+    n_f = len({p["frequency_hz"] for p in doc["measurement"]["points"]})
+    print(f"{n_points} measured points at {n_f} frequencies, model {doc['model']['name']} "
+          f"(surrogate spread x{doc['likelihood']['surrogate_std_factor']:g}); emcee "
+          f"{s['walkers']} walkers x "
           f"{s['steps']} steps, acceptance {s['acceptance_fraction']:.2f}, autocorrelation "
           f"{max(s['autocorr_steps']):.0f} steps, {s['wall_s']:.1f} s")
     print(f"  {'input':22s} {'mean':>9s} {'95 % interval':>22s} {'prior 95 %':>22s} "
@@ -190,8 +188,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a model input held fixed (overrides the file's design./site. lines)")
     p.add_argument("--walkers", type=positive_int, default=32, help="emcee walkers (32)")
-    p.add_argument("--steps", type=positive_int, default=1500,
-                   help="steps per walker (1500; the first third is burn-in)")
+    p.add_argument("--steps", type=positive_int, default=1000,
+                   help="steps per walker (1000; the first third is burn-in)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument("--std-factor", type=float, default=None, metavar="K",
                    help="widen the surrogate's predictive log-std by K (default: from the "
