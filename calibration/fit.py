@@ -27,7 +27,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import emcee
 import numpy as np
 
 from calibration.forward import ForwardModel
@@ -180,6 +179,8 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
             mean, std = fwd.predict(x)
             out[ok] = lp[ok] + _log_likelihood(mean, std, y, rel, k, corr)
         return out
+
+    import emcee  # here, so that reading a calibration (the planner) needs numpy only
 
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()

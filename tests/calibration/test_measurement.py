@@ -111,3 +111,17 @@ def test_python_rows_and_round_trip(tmp_path):
     bad = [dict(rows[0], quantity="force")]
     with pytest.raises(MeasurementError, match="row 1, column quantity: 'force'"):
         measurement_from_rows(bad)
+
+
+def test_runtime_path_imports_no_solver_or_training_stack():
+    """The calibration library runs on numpy, onnxruntime and emcee; the planner's tissue hook
+    reads a calibration without even emcee."""
+    import subprocess
+    import sys
+
+    code = ("import sys, calibration, calibration.plot, planner.tissue; "
+            "bad = [m for m in ('fem', 'torch', 'sklearn', 'scipy', 'pysindy', 'emcee') "
+            "if m in sys.modules]; print(' '.join(bad))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == []
