@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from calibration import calibrate, surrogate_std_factor
+from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM
 from calibration.synthetic import synthetic_measurement
 from surrogate.runtime import load_predictor
 
@@ -37,8 +38,8 @@ NOISES = (0.05, 0.10)
 
 
 def run(subjects: list[dict], predictor, *, component: str = "magnitude",
-        steps: int = 1000, std_factor: float | None = None, quiet: bool = False
-        ) -> list[dict]:
+        steps: int = 1000, std_factor: float | None = None, quiet: bool = False,
+        **likelihood: float) -> list[dict]:
     """One record per (subject, noise): truth, posterior summary, run time."""
     records = []
     for s in subjects:
@@ -48,7 +49,7 @@ def run(subjects: list[dict], predictor, *, component: str = "magnitude",
                                       rng=rng, component=component)
             t0 = time.perf_counter()
             cal = calibrate(predictor, m, FIT, steps=steps, burn=steps // 3, seed=int(s["id"]),
-                            std_factor=std_factor)
+                            std_factor=std_factor, **likelihood)
             summary = cal.summary()
             wall = time.perf_counter() - t0
             records.append({"id": s["id"], "noise": noise, "points": len(m.points),
@@ -138,6 +139,10 @@ def main() -> None:
                     "normal-component output)")
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--std-factor", type=float, default=None)
+    ap.add_argument("--error-length-mm", type=float, default=ERROR_LENGTH_MM,
+                    help="correlation length of the surrogate's error along the profile "
+                    "(tiny: independent errors)")
+    ap.add_argument("--error-frequency-hz", type=float, default=ERROR_FREQUENCY_HZ)
     ap.add_argument("--json", type=Path, help="write the records")
     ap.add_argument("--residuals", action="store_true",
                     help="only measure the surrogate's error structure on the residual subjects")
@@ -150,7 +155,8 @@ def main() -> None:
     subjects = json.loads(CACHE.read_text())["subjects"][: args.subjects]
     t0 = time.perf_counter()
     records = run(subjects, predictor, component=args.component, steps=args.steps,
-                  std_factor=args.std_factor)
+                  std_factor=args.std_factor, error_length_mm=args.error_length_mm,
+                  error_frequency_hz=args.error_frequency_hz)
     print(f"{len(subjects)} FE subjects x {len(NOISES)} noise levels, model "
           f"{predictor.card.get('name')}, component {args.component}, "
           f"{time.perf_counter() - t0:.0f} s in all")
