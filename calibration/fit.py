@@ -151,7 +151,7 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
         raise PriorError("steps", f"steps {steps} must exceed burn {burn} >= 0")
     prs = priors_for(fit, predictor.specs, priors)
     values = {**measurement.design, **measurement.site, **(fixed or {})}
-    clash = sorted(set(values) & set(fit))
+    # a fitted input that also has a value (a site. line): the fit wins, the value is a guess
     given = {k: v for k, v in values.items() if k not in fit}
     missing = [n for n in predictor.input_names if n not in given and n not in fit
                and n != "frequency_hz"]
@@ -163,7 +163,6 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
         raise PriorError(missing[0], f"{missing[0]}: no value for this model input; give it in "
                          "the measurement file ('# design.NAME = ...' or '# site.NAME = ...'), "
                          "with --set NAME=VALUE, or fit it")
-    del clash  # a fitted input given a value as well: the fit wins (the value is a guess)
     fwd = ForwardModel(predictor, measurement, [p.name for p in prs], given)
     k = surrogate_std_factor(predictor.card) if std_factor is None else std_factor
     y, rel = fwd.y, fwd.rel_sigma

@@ -24,7 +24,7 @@ QUICK = ["--walkers", "16", "--steps", "300"]
 def calibrated(tmp_path_factory):
     out = tmp_path_factory.mktemp("cal")
     code = main(["calibrate", EXAMPLE, "--model", "models/nn-default", "--fit", FIT, *QUICK,
-                 "--out", str(out / "cal.json"), "--plot", str(out / "cal.png")])
+                 "--out", str(out / "cal.json"), "--plot", str(out / "cal.png"), "--verify"])
     assert code == 0
     return out
 
@@ -41,6 +41,12 @@ def test_calibrate_writes_a_valid_document_and_figure(calibrated, capsys):
     lo, hi = doc["posterior"]["tissue_loss_factor"]["ci95"]
     assert lo < 0.22 < hi
     assert (calibrated / "cal.png").stat().st_size > 10_000
+    # --verify: FE at the posterior mean, point by point, close to the surrogate and the data
+    v = doc["verify"]
+    assert len(v["points"]) == 14 and v["dofs"] > 1000
+    assert v["median_abs_log_surrogate_vs_fe"] < 0.1
+    for q in v["points"]:
+        assert abs(q["fe_um"] / q["measured_um"] - 1) < 0.25
 
 
 def test_bad_measurement_exits_2_and_writes_nothing(tmp_path, capsys):
