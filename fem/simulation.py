@@ -15,20 +15,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from . import SOLVER_VERSION, results, transient_analysis
+from . import SOLVER_VERSION, probes, results, transient_analysis
 from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .domain import Domain
 from .haptic_unit import pin_contact_check
 from .problem import (
-    Problem,
     build_problem,
     drive_omega,
-    mesh_spec,
-    shortest_shear_wavelength,
-    wave_element_size,
+    resolution_warning,
 )
 from .scene import Scene
 from .solve import OperatorLog, solve_mode
+from .sweep import SweepResult, sweep
 
 
 @dataclass(frozen=True)
@@ -168,8 +166,10 @@ class SimulationResult:
 
 
 def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
-             progress: Callable[[int, int], None] | None = None) -> SimulationResult:
-    """Solve a scene and sample the skin surface.
+             progress: Callable[[int, int], None] | None = None
+             ) -> SimulationResult | SweepResult:
+    """Solve a scene and sample the skin surface (a sweep scene: at every frequency of its
+    band, :func:`fem.sweep.sweep`).
 
     ``progress(done, total)`` is called with time steps done and the total during a transient
     (a few hundred times per run; never for a steady solve).
@@ -177,15 +177,16 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     The size is estimated first (:func:`fem.cost.check_cost`): a scene above ``max_unknowns``
     is refused with a :class:`fem.scene.SceneError` naming the fields that drive its size,
     before anything is allocated. Pass a larger ``max_unknowns`` (``math.inf``) to run it."""
+    if scene.analysis.kind == "sweep":
+        return sweep(scene, max_unknowns=max_unknowns)
     t0 = time.perf_counter()
     check_cost(scene, max_unknowns)
     problem = build_problem(scene)
     log = OperatorLog()
     edge = problem.edge
-    r_probe = np.asarray(scene.output.radii_m)
-    prof_mm, cut = _profile_distances_mm(scene, edge or 0.0)
-    radii = np.concatenate([r_probe, [0.0, edge or 0.0], (edge or 0.0) + prof_mm * 1e-3])
-    stencil = _stencil(problem, radii, r_probe.size)
+    pts = probes.output_points(scene, problem)
+    r_probe, prof_mm, cut, radii, stencil = (pts.r_probe, pts.profile_mm, pts.cut, pts.radii,
+                                             pts.stencil)
     histories, extras = None, {}
     if scene.analysis.kind == "transient":
         histories = transient_analysis.run(scene, problem, stencil, radii, log, progress)
@@ -218,53 +219,3 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
                             prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras,
                             centre_z_mm)
-
-
-def _stencil(problem: Problem, radii: NDArray, center_index: int) -> tuple[NDArray, NDArray]:
-    """Interpolation stencil of the skin surface at ``radii``, except the center point
-    (index ``center_index``), which sits on the unit's skin-side face (see
-    ``fem.haptic_unit``)."""
-    nodes, weights = results.surface_stencil(problem.domain, radii)
-    lay = problem.layout
-    if lay is not None and lay.contact_z != 0.0:
-        c_nodes, c_weights = results.surface_stencil(problem.domain, [0.0], lay.contact_z,
-                                                     side="above")
-        nodes, weights = nodes.copy(), weights.copy()
-        nodes[center_index], weights[center_index] = c_nodes[0], c_weights[0]
-    return nodes, weights
-
-
-def _profile_distances_mm(scene: Scene, edge: float) -> tuple[NDArray, str | None]:
-    """Distances from the edge (mm) of the profile, within the meshed radius, and a warning
-    naming the keys when the requested length had to be cut to the model."""
-    out = scene.output
-    n = int(np.floor(out.profile_length_mm / out.profile_step_mm + 1e-9))
-    d = out.profile_step_mm * np.arange(n + 1)
-    kept = d[edge + d * 1e-3 <= scene.tissue.radius_m * (1 + 1e-12)]
-    if kept.size == d.size:
-        return kept, None
-    room = (scene.tissue.radius_m - edge) * 1e3
-    return kept, (f"output.profile_length_mm = {out.profile_length_mm:g} reaches beyond the "
-                  f"model: cut to {kept[-1] if kept.size else 0.0:g} mm (tissue.radius_mm = "
-                  f"{scene.tissue.radius_m * 1e3:g} less the edge radius "
-                  f"{edge * 1e3:g} mm leaves {room:g} mm); raise tissue.radius_mm or lower "
-                  "output.profile_length_mm")
-
-
-def resolution_warning(scene: Scene, problem: Problem) -> str | None:
-    """A message when the largest elements hold fewer than ``ELEMENTS_PER_WAVELENGTH / order``
-    elements per shortest shear wavelength (10 linear or 5 quadratic keep the phase error near
-    1 %). Only possible with ``mesh.follow_wavelength = false``: otherwise the mesh obeys the
-    rule by construction."""
-    lam, part = shortest_shear_wavelength(scene)
-    h = mesh_spec(scene).far_size
-    if not np.isfinite(lam) or h <= wave_element_size(scene) * (1 + 1e-9):
-        return None
-    f = drive_omega(scene) / (2 * np.pi)
-    per_wave = lam / h
-    advice = f"use far_size_mm <= {np.floor(wave_element_size(scene) * 1e6) / 1e3:g}"
-    if scene.mesh.order == 1:
-        advice += " or mesh.order = 2"
-    return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
-            f"in '{part}' at {f:g} Hz with far_size_mm = {h * 1e3:g} and order "
-            f"{scene.mesh.order}; {advice}, or mesh.follow_wavelength = true (about 1 % error)")
