@@ -12,7 +12,8 @@ chosen design at the chosen frequency for every posterior draw of the tissue and
 draw's smallest feasible pitch (the same criterion and bisection as the plan); the pitch at the
 posterior's 95 % bound is the 95th percentile of those (a draw with no feasible pitch counts as
 larger than any). The same with the surrogate's own 95 % bound field gives the conservative
-figure that holds for both uncertainties.
+figure that holds for both uncertainties; ``pitch_95_for_plan_mm`` is the one of the two that
+matches the plan's own rule (``criterion.holds_at``: the bounds or the prediction).
 """
 
 from __future__ import annotations
@@ -79,17 +80,24 @@ def posterior_pitch(plan: Plan, tissue: Tissue, max_draws: int = MAX_DRAWS
         s_c, s_p = float(out["center_amplitude_um_log_std"][k]), out["profile_um_log_std"][k]
         edge = float(out["edge_radius_mm"][k])
         f_nom = UnitField(c, edge, grid, p)
-        f_95 = UnitField(c * np.exp(-Z95 * s_c), edge, grid, p * np.exp(Z95 * s_p))
-        nominal.append(smallest_pitch(f_nom, req, best.frequency_hz))
-        bound.append(smallest_pitch(f_95, req, best.frequency_hz))
+        f_95 = UnitField(c * np.exp(-Z95 * s_c), edge, grid, p * np.exp(Z95 * s_p), floor=f_nom)
+        p_nom = smallest_pitch(f_nom, req, best.frequency_hz)
+        p_95 = smallest_pitch(f_95, req, best.frequency_hz)
+        nominal.append(p_nom)
+        # as the plan does: the bounds never ask for less room than the prediction
+        bound.append(None if p_95 is None or p_nom is None else max(p_95, p_nom))
 
     def pct(values: list[float | None], q: float) -> float | None:
         arr = np.array([np.inf if v is None else v for v in values])
         x = float(np.percentile(arr, q, method="higher"))
         return None if not np.isfinite(x) else round(x, 3)
 
+    holds_at = getattr(req.criterion, "holds_at", "nominal")
+    rule = bound if holds_at == "bounds_95" else nominal
     return {"draws": n, "design": best.name, "frequency_hz": best.frequency_hz,
+            "holds_at": holds_at,
             "pitch_mm_at_point_estimate": round(best.pitch_mm, 3),
+            "pitch_95_for_plan_mm": pct(rule, 95.0),
             "pitch_mm_median": pct(nominal, 50.0), "pitch_mm_2_5": pct(nominal, 2.5),
             "pitch_mm_97_5": pct(nominal, 97.5), "pitch_95_mm": pct(nominal, 95.0),
             "pitch_95_with_surrogate_mm": pct(bound, 95.0),

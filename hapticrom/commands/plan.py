@@ -269,10 +269,13 @@ def _print_tissue(plan: Any, tissue: Any) -> dict[str, Any] | None:
     def mm(x: float | None) -> str:
         return "infeasible" if x is None else f"{x:.2f} mm"
 
-    print(f"  pitch over {s['draws']} posterior draws: median {mm(s['pitch_mm_median'])}, 95 % "
-          f"[{mm(s['pitch_mm_2_5'])}, {mm(s['pitch_mm_97_5'])}]; at the posterior's 95 % bound "
-          f"{mm(s['pitch_95_mm'])}, with the surrogate's 95 % bounds too "
-          f"{mm(s['pitch_95_with_surrogate_mm'])}")
+    print(f"  pitch over {s['draws']} posterior draws (prediction): median "
+          f"{mm(s['pitch_mm_median'])}, 95 % [{mm(s['pitch_mm_2_5'])}, "
+          f"{mm(s['pitch_mm_97_5'])}], at the posterior's 95 % bound {mm(s['pitch_95_mm'])}; "
+          f"with the surrogate's 95 % bounds too {mm(s['pitch_95_with_surrogate_mm'])}")
+    print(f"  pitch for this person at the posterior's 95 % bound, judged as the plan is "
+          f"({s['holds_at']}): {mm(s['pitch_95_for_plan_mm'])} (the plan's "
+          f"{s['pitch_mm_at_point_estimate']:.2f} mm is at the posterior mean)")
     return s
 
 

@@ -80,6 +80,10 @@ def test_plan_with_the_calibrated_tissue(calibrated, tmp_path, capsys):
     assert t["draws"] == 400 and t["design"] == doc["best"]
     assert t["pitch_mm_2_5"] <= t["pitch_mm_median"] <= t["pitch_mm_97_5"]
     assert t["pitch_95_mm"] <= t["pitch_95_with_surrogate_mm"]
+    # the plan judges at the surrogate's 95 % bounds by default, and so does the person's pitch
+    assert t["holds_at"] == "bounds_95"
+    assert t["pitch_95_for_plan_mm"] == t["pitch_95_with_surrogate_mm"]
+    assert t["pitch_mm_at_point_estimate"] == doc["pitch_mm"]
     assert "pitch over 400 posterior draws" in text
 
 
