@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from hapticrom.commands._args import positive_int
+from hapticrom.commands._args import number_in, positive_int
 from hapticrom.outputs import atomic_path, check_output_file
 
 __all__ = ["register"]
@@ -39,6 +39,17 @@ def _sets(items: list[str]) -> dict[str, Any]:
         except ValueError:
             out[name.strip()] = text
     return out
+
+
+def _seed(text: str) -> int:
+    """A random seed: an integer in [0, 2^32)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"{value} is not in [0, 2^32)")
+    return value
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -190,8 +201,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--walkers", type=positive_int, default=32, help="emcee walkers (32)")
     p.add_argument("--steps", type=positive_int, default=1000,
                    help="steps per walker (1000; the first third is burn-in)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (0)")
-    p.add_argument("--std-factor", type=float, default=None, metavar="K",
+    p.add_argument("--seed", type=_seed, default=0,
+                   help="random seed, an integer in [0, 2^32) (0)")
+    p.add_argument("--std-factor", type=number_in(0.0, 100.0), default=None, metavar="K",
                    help="widen the surrogate's predictive log-std by K (default: from the "
                    "card's held-out 95 %% coverage)")
     p.add_argument("--out", metavar="JSON", help="write the calibration document")
