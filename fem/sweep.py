@@ -150,8 +150,8 @@ def sweep(scene: Scene, *, tolerance: float = SWEEP_TOLERANCE,
         "basis_size": int(model.basis.shape[1]), "chebyshev_nodes": int(
             s.operator.nodes_t.size), "residual": report.residual,
         "residual_hz": report.residual_hz,
-        "stages_s": {"setup": t_setup, "model": t_model,
-                     "evaluation": wall - t_setup - t_model},
+        "stages_s": {"setup": t_setup, **report.stages_s,
+                     "output": wall - t_setup - t_model},
     }
     warnings = [w for w in (resolution_warning(scene, s.problem), s.points.cut) if w]
     converged = float(estimate.max()) <= tolerance

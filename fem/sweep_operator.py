@@ -81,28 +81,44 @@ def lagrange_weights(nodes: NDArray, x: float) -> tuple[NDArray, NDArray]:
 def stiffness_and_mass(problem: Problem, idx: NDArray, stretch) -> tuple[NDArray, NDArray]:
     """Element stiffness K* (hysteretic moduli) and mass M (ne, nd, nd) of elements ``idx``
     under ``stretch`` (None: none), formed as the harmonic solve forms them."""
+    K = _formed(problem, idx, stretch, None)
+    zero = np.zeros(problem.domain.mesh.n_elements)
+    return K, _formed(problem, idx, stretch, 1.0, moduli=(zero, zero))
+
+
+def dynamic_matrices(problem: Problem, idx: NDArray, stretch, omega: float) -> NDArray:
+    """K* - omega^2 M (ne, nd, nd) of elements ``idx`` under ``stretch``, in one formation."""
+    return _formed(problem, idx, stretch, -omega**2)
+
+
+def _formed(problem: Problem, idx: NDArray, stretch, mass_factor: float | None,
+            moduli: tuple[NDArray, NDArray] | None = None) -> NDArray:
+    """sum of stiffness (``moduli``: shear and bulk per element, default the hysteretic
+    ones) and ``mass_factor`` x mass (none if None) of elements ``idx``."""
     domain, mode = problem.domain, problem.mode
     mesh = domain.mesh
-    mu, kappa = domain.element_property("mu"), domain.element_property("kappa")
-    eta, rho = domain.element_property("loss_factor"), domain.element_property("density")
-    mu_star, kappa_star = mu * (1.0 + 1j * eta), kappa * (1.0 + 1j * eta)
+    if moduli is None:
+        eta = domain.element_property("loss_factor")
+        moduli = (domain.element_property("mu") * (1.0 + 1j * eta),
+                  domain.element_property("kappa") * (1.0 + 1j * eta))
+    mu, kappa = moduli
+    rho = domain.element_property("density")
     nd = mesh.elements.shape[1] * elements.dofs_per_node(mode)
-    K = np.empty((idx.size, nd, nd), dtype=complex)
-    M = np.empty((idx.size, nd, nd), dtype=complex)
+    out = np.empty((idx.size, nd, nd), dtype=complex)
     by_column = columns.column_path(mesh, stretch)[idx]
     col = idx[by_column]
     if col.size:
-        zero = np.zeros(col.size)
-        K[by_column] = columns.column_matrices(
-            mesh, col, stretch, mode, np.column_stack([mu_star[col], kappa_star[col]]))
-        M[by_column] = columns.column_matrices(
-            mesh, col, stretch, mode, np.column_stack([zero, zero, rho[col]]))
+        coef = [mu[col], kappa[col]] + ([] if mass_factor is None else [mass_factor * rho[col]])
+        out[by_column] = columns.column_matrices(mesh, col, stretch, mode,
+                                                 np.column_stack(coef))
     rest = idx[~by_column]
     if rest.size:
         g = elements.gauss_data(mesh, stretch, subset=rest)
-        K[~by_column] = elements.stiffness(g, mode, mu_star[rest], kappa_star[rest])
-        M[~by_column] = elements.mass(g, mode, rho[rest])
-    return K, M
+        Z = elements.stiffness(g, mode, mu[rest], kappa[rest])
+        if mass_factor is not None:
+            Z = Z + mass_factor * elements.mass(g, mode, rho[rest])
+        out[~by_column] = Z
+    return out
 
 
 @dataclass(frozen=True)
@@ -182,8 +198,8 @@ class SweepOperator:
         Z_pml = np.empty((nodes_t.size, pml.size, nd, nd), dtype=complex)
         for j, t in enumerate(nodes_t):
             if pml.size:
-                K, M = stiffness_and_mass(problem, pml, replace(stretch, omega=1.0 / t))
-                Z_pml[j] = K - M / t**2
+                Z_pml[j] = dynamic_matrices(problem, pml, replace(stretch, omega=1.0 / t),
+                                            1.0 / t)
         layer = ElementGroup.build(dm, edofs[pml], Z_pml)
         springs = tuple(ElementGroup.build(dm, d, K) for _, d, K in problem.extra)
         return cls(problem, dm, inside, pml, ElementGroup.build(dm, edofs[inside], K_in),
@@ -260,11 +276,10 @@ class CondensedSolver:
     factorisation of the operator condensed to the element boundaries (exact: each interior
     node belongs to one element)."""
 
-    full: DofMap
-    boundary: DofMap
-    to_full: NDArray  # (n_b,) free index in ``full`` of each boundary free dof
-    interior: NDArray  # (ne, nc) free index in ``full`` of each element's interior dofs
-    outer_dofs: NDArray  # (ne, nb) full dof indices of each element's boundary dofs
+    n_free: int
+    to_full: NDArray  # (n_b,) free index in the uncondensed map of each boundary free dof
+    interior: NDArray  # (ne, nc) free index in the uncondensed map of each element's interior
+    outer: ElementGroup  # element boundary dofs on the condensed map (gather / scatter)
     recover: NDArray  # (ne, nc, nb): u_c = Zcc^-1 f_c + recover u_b
     lift: NDArray  # (ne, nb, nc): Z_bc Zcc^-1, moves interior loads to the boundary
     inverse_cc: NDArray  # (ne, nc, nc)
@@ -285,7 +300,8 @@ class CondensedSolver:
         edofs = full.element_dofs
         if inner.size:
             Zb, outer, recover = condense(Z, inner)
-            inverse_cc = small_inverse(Z[:, inner[0]:inner[-1] + 1, inner[0]:inner[-1] + 1])
+            block = slice(int(inner[0]), int(inner[-1]) + 1)
+            inverse_cc = small_inverse(Z[:, block, block])
             lift = np.matmul(Z[:, outer][:, :, inner], inverse_cc)
         else:
             Zb, outer = Z, np.arange(Z.shape[1])
@@ -297,30 +313,26 @@ class CondensedSolver:
         masters = np.flatnonzero((boundary.master >= 0) & (boundary.coef == 1.0))
         to_full = np.empty(boundary.n_free, dtype=int)
         to_full[boundary.master[masters]] = full.master[masters]
-        interior = full.master[edofs[:, inner]] if inner.size else np.empty((mesh.n_elements, 0),
-                                                                             dtype=int)
-        return cls(full, boundary, to_full, interior, outer_dofs, recover, lift, inverse_cc,
-                   factor)
+        interior = (full.master[edofs[:, inner]] if inner.size
+                    else np.empty((mesh.n_elements, 0), dtype=int))
+        return cls(full.n_free, to_full, interior,
+                   ElementGroup.build(boundary, outer_dofs, np.empty(0)), recover, lift,
+                   inverse_cc, factor)
 
     def solve(self, f: NDArray) -> NDArray:
         """x with A x = f; ``f`` and x (n_free,) or (n_free, k) on the uncondensed free dofs."""
         f = np.asarray(f, dtype=complex)
-        single = f.ndim == 1
-        F = f[:, None] if single else f
+        F = f[:, None] if f.ndim == 1 else f
+        k = F.shape[1]
         Fb = F[self.to_full]
-        if self.interior.shape[1]:
+        condensed = self.interior.shape[1] > 0
+        if condensed:
             Fc = F[self.interior]  # (ne, nc, k)
-            moved = -np.matmul(self.lift, Fc)  # (ne, nb, k)
-            rows, coefs = self.boundary.master[self.outer_dofs], self.boundary.coef[
-                self.outer_dofs]
-            keep = rows >= 0
-            np.add.at(Fb, rows[keep], (coefs[..., None] * moved)[keep])
-        Ub = self.factor.solve(Fb)
-        Ub = Ub.reshape(Fb.shape)
-        X = np.zeros((self.full.n_free, F.shape[1]), dtype=complex)
+            Fb = Fb - self.outer.gather.T @ np.matmul(self.lift, Fc).reshape(-1, k)
+        Ub = self.factor.solve(Fb).reshape(Fb.shape)
+        X = np.zeros((self.n_free, k), dtype=complex)
         X[self.to_full] = Ub
-        if self.interior.shape[1]:
-            U_full = self.boundary.expand(Ub)  # (n_full, k)
+        if condensed:
             X[self.interior] = (np.matmul(self.inverse_cc, Fc)
-                                + np.matmul(self.recover, U_full[self.outer_dofs]))
-        return X[:, 0] if single else X
+                                + np.matmul(self.recover, self.outer.local(Ub)))
+        return X[:, 0] if f.ndim == 1 else X

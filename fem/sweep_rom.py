@@ -20,6 +20,7 @@ the residual of the full operator at the frequency of the largest estimate.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -110,6 +111,7 @@ class GreedyReport:
     back_solves: int = 0
     residual: float = float("nan")
     residual_hz: float = float("nan")
+    stages_s: dict[str, float] = field(default_factory=dict)
 
 
 def _orthonormalise(V: NDArray, w: NDArray, drop: float = 1e-8) -> NDArray | None:
@@ -140,52 +142,71 @@ def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArr
         (model, estimate (n_f,) of the relative output error, report).
     """
     coef = np.array([op.coefficients(w) for w in omegas])  # (n_f, n_terms)
-    n = op.dofmap.n_free
-    V = np.empty((n, 0), dtype=complex)
     report = GreedyReport()
-    estimate = np.full(omegas.size, np.inf)
-    krylov_all: list[NDArray] = []
-    deepest_all: list[bool] = []
-    omega_e = float(omegas[omegas.size // 2])
+    V = np.empty((op.dofmap.n_free, 0), dtype=complex)
+    krylov: list[NDArray] = []
+    deepest: list[bool] = []
+    used = np.zeros(omegas.size, dtype=bool)
+    at = omegas.size // 2
     while True:
-        solver = op.solver(omega_e)
-        report.factorisations += 1
-        report.expansions_hz.append(omega_e / (2 * np.pi))
-        slope = op.combined(op.coefficients(omega_e, derivative=True))  # dA/domega
-        added, krylov = 0, []
-        # Arnoldi within the block (its span is the Krylov space of this point); each vector
-        # then joins the global basis, and its coordinates there are kept for the estimate
-        block = np.empty((n, 0), dtype=complex)
-        w = solver.solve(op.load)
-        for k in range(depth):
-            qb = _orthonormalise(block, w)
-            q = None if qb is None else _orthonormalise(V, qb)
-            if q is None:
-                break
-            block = np.column_stack([block, qb])
-            V = np.column_stack([V, q])
-            krylov.append(V.conj().T @ qb)
-            added += 1
-            if k < depth - 1:
-                w = solver.solve(op.apply(slope, qb))
-        report.back_solves += added
-        deepest = [False] * len(krylov)
-        if len(krylov) > 1:
-            deepest[-1] = True
-        model = ReducedModel(V, op.project(V), V.conj().T @ op.load, output_map(V))
-        model.krylov, model.deepest = [*krylov_all, *krylov], [*deepest_all, *deepest]
-        krylov_all, deepest_all = model.krylov, model.deepest
+        used[at] = True
+        V, new = _expand(op, float(omegas[at]), V, depth, report)
+        krylov = [*krylov, *new]
+        deepest = [*deepest, *([False] * (len(new) - 1) + [True] if len(new) > 1
+                               else [False] * len(new))]
+        t = time.perf_counter()
+        model = ReducedModel(V, op.project(V), V.conj().T @ op.load, output_map(V), krylov,
+                             deepest)
+        t = _lap(report, "projection", t)
         full = model.evaluate(coef)
         estimate = output_errors(model.evaluate(coef, model.without_deepest()), full, groups)
+        _lap(report, "evaluation", t)
         report.estimates.append(float(estimate.max()))
+        # a point already expanded at is exact there; look elsewhere
+        candidates = np.where(used, -1.0, estimate)
         if estimate.max() <= tolerance or report.factorisations >= max_expansions \
-                or added == 0:
+                or not new or candidates.max() < 0:
             break
-        omega_e = float(omegas[int(np.argmax(estimate))])
+        at = int(np.argmax(candidates))
     worst = int(np.argmax(estimate))
-    report.residual, report.residual_hz = _residual(model, op, coef[worst]), float(
-        omegas[worst] / (2 * np.pi))
+    report.residual = _residual(model, op, coef[worst])
+    report.residual_hz = float(omegas[worst] / (2 * np.pi))
     return model, estimate, report
+
+
+def _expand(op: SweepOperator, omega_e: float, V: NDArray, depth: int,
+            report: GreedyReport) -> tuple[NDArray, list[NDArray]]:
+    """Factorise A(omega_e) and add up to ``depth`` Krylov vectors to V: Arnoldi within the
+    block (its span is this point's Krylov space); each vector then joins the global basis and
+    its coordinates there are returned (for the estimate)."""
+    t = time.perf_counter()
+    solver = op.solver(omega_e)
+    report.factorisations += 1
+    report.expansions_hz.append(omega_e / (2 * np.pi))
+    t = _lap(report, "factorisation", t)
+    slope = op.combined(op.coefficients(omega_e, derivative=True))  # dA/domega
+    block = np.empty((V.shape[0], 0), dtype=complex)
+    coords: list[NDArray] = []
+    w = solver.solve(op.load)
+    for k in range(depth):
+        qb = _orthonormalise(block, w)
+        q = None if qb is None else _orthonormalise(V, qb)
+        if q is None:
+            break
+        block = np.column_stack([block, qb])
+        V = np.column_stack([V, q])
+        coords.append(V.conj().T @ qb)
+        report.back_solves += 1
+        if k < depth - 1:
+            w = solver.solve(op.apply(slope, qb))
+    _lap(report, "basis", t)
+    return V, coords
+
+
+def _lap(report: GreedyReport, stage: str, t0: float) -> float:
+    now = time.perf_counter()
+    report.stages_s[stage] = report.stages_s.get(stage, 0.0) + now - t0
+    return now
 
 
 def _residual(model: ReducedModel, op: SweepOperator, coef: NDArray) -> float:

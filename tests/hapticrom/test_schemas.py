@@ -36,6 +36,8 @@ def documents():
         "static": _scene("examples/forearm.toml", kind="static"),
         "transient": _scene("examples/unit-transient.toml", duration_ms=6.0,
                             time_step_ms=0.2, voltage_schedule=[[0.0, 3.3], [4.0, 0.0]]),
+        "sweep": _scene("examples/unit-bare-forward.toml", kind="sweep",
+                        frequency_hz=[110.0, 160.0, 210.0]),
     }
     out = {}
     for kind, scene in scenes.items():
@@ -44,7 +46,7 @@ def documents():
     return out
 
 
-@pytest.mark.parametrize("kind", ["harmonic", "static", "transient"])
+@pytest.mark.parametrize("kind", ["harmonic", "static", "transient", "sweep"])
 def test_simulate_document_conforms_to_its_schema(documents, kind):
     res, doc = documents[kind]
     assert problems(doc, schema(f"simulate-{kind}")) == []
@@ -53,8 +55,18 @@ def test_simulate_document_conforms_to_its_schema(documents, kind):
     assert doc["scene"]["name"] == f"{kind}.toml"
     assert doc["analysis"]["kind"] == kind
     # the other kinds' schemas refuse it: the names say what the values are
-    for other in {"harmonic", "static", "transient"} - {kind}:
+    for other in {"harmonic", "static", "transient", "sweep"} - {kind}:
         assert problems(doc, schema(f"simulate-{other}"))
+
+
+def test_sweep_values_are_lists_over_the_band(documents):
+    res, doc = documents["sweep"]
+    assert doc["analysis"]["frequency_hz"] == [110.0, 160.0, 210.0]
+    z = (np.asarray(doc["centre"]["ur_complex_um"]["re"])
+         + 1j * np.asarray(doc["centre"]["ur_complex_um"]["im"]))
+    assert np.allclose(z, res.center[:, 0] * 1e6)
+    assert np.asarray(doc["profile"]["magnitude_um"]).shape == res.profile.shape[:2]
+    assert doc["reduced_model"]["full_solves"] == res.full_solves
 
 
 def test_harmonic_values_amplitudes_and_complex_agree(documents):
