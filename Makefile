@@ -32,6 +32,7 @@ demo: $(STAMP)
 	for u in $(UNITS); do \
 	  $(BIN)/hapticrom simulate examples/$$u.toml --json out/$$u.json --plot out/$$u.png || exit 1; \
 	done
+	$(BIN)/hapticrom simulate examples/unit-sweep.toml --json out/unit-sweep.json --plot out/unit-sweep.png
 	$(BIN)/hapticrom models list --root models
 	$(BIN)/hapticrom predict models/nn-default --csv examples/designs.csv --json out/designs-nn.json
 	$(BIN)/python examples/surrogate_vs_fe.py
