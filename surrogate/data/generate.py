@@ -171,7 +171,7 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
     out = Path(out)
     store = None
     if Store.exists(out):
-        store = Store.open(out)
+        store = Store.open(out, deep=True)
     elif out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise DatasetError("out", f"{out} exists and is not a hapticrom dataset (nor an empty "
                            "directory)")

@@ -179,7 +179,7 @@ def _open_target(out: str | Path, space: Space | str | Path | None) -> tuple[Sto
     if isinstance(space, str | Path):
         space = load_space(space)
     if Store.exists(out):
-        store = Store.open(out)
+        store = Store.open(out, deep=True)
         if space is not None and space.space_hash() != store.manifest.get("space_hash"):
             raise DatasetError("space", f"space {space.name!r} differs from the space of {out}; "
                                "give no space to use the dataset's own")
