@@ -69,6 +69,7 @@ def format_info(info: dict[str, Any]) -> str:
         f"solver    {solver.get('version')} ({solver.get('hash')}) git "
         f"{solver.get('git_revision')}; all: {', '.join(info['solver_versions'])}",
         f"analysis  {info.get('analysis_kind')}; mesh {info.get('mesh')}",
+        f"outputs   {info.get('outputs')}",
         f"rows      {info['rows']} ({info['ok']} ok, {info['failed']} failed) in "
         f"{info['parts']} parts, {info['bytes'] / 1e6:.2f} MB",
         f"sources   {', '.join(f'{k}: {v}' for k, v in info['by_source'].items()) or '-'}",

@@ -15,6 +15,7 @@ import pyarrow as pa
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
+from surrogate.data.output_checks import check_outputs, outputs_summary
 from surrogate.data.provenance import solver_key
 from surrogate.data.space import Space
 from surrogate.data.store import FEM_SOURCE, STATUSES, DatasetWarning, Store
@@ -40,6 +41,7 @@ def dataset_info(path: str | Path) -> dict[str, Any]:
         "solver_versions": sorted({s.get("version", "?") + "+" + s.get("hash", "?")
                                    for s in m.get("solver_history", [])}),
         "analysis_kind": m.get("analysis_kind"), "mesh": m.get("mesh"),
+        "outputs": outputs_summary(m, store.schema.names), "band": m.get("band"),
         "profile_grid_mm": m.get("profile_grid_mm"), **counts,
         "bytes": sum(p.stat().st_size for p in store.parts()),
         "temp_files": len(store.temp_files()),
@@ -119,11 +121,13 @@ def _check_rows(store: Store, df: Any) -> list[str]:
     if no_error.any():
         problems.append(f"{int(no_error.sum())} failed rows have no error text")
     ok_fem = fem & (df["status"] == "ok")
-    for col in ("edge_amplitude_um", "center_amplitude_um"):
-        vals = df.loc[ok_fem, col].to_numpy(dtype=float)
-        if vals.size and not np.all(np.isfinite(vals)):
-            problems.append(f"generated ok rows with non-finite {col}")
-    problems += _check_profiles(store, df.loc[ok_fem])
+    if not store.manifest.get("band"):  # single-frequency magnitudes
+        for col in ("edge_amplitude_um", "center_amplitude_um"):
+            vals = df.loc[ok_fem, col].to_numpy(dtype=float)
+            if vals.size and not np.all(np.isfinite(vals)):
+                problems.append(f"generated ok rows with non-finite {col}")
+        problems += _check_profiles(store, df.loc[ok_fem])
+    problems += check_outputs(store.manifest, df.loc[ok_fem])
     problems += _check_ranges(store.space, df)
     return problems
 

@@ -28,12 +28,8 @@ rows, row number in the source file for ingested rows), ``status`` ("ok" or "fai
 ``wall_s`` [s], ``dofs``, ``elements``, ``solver_version``, ``solver_hash``, the resolved
 scene as canonical JSON (``scene_json``) and the solver's warnings (``warnings``, e.g. an
 under-resolved mesh; "; "-joined, null if none). Then one column per space parameter, then the
-outputs: center/edge amplitudes [um], normalized edge amplitude [-], the surface profile
-(list columns ``profile_distance_mm``, ``profile_uz_um``, ``profile_magnitude_um``) and, for
-transient scenes, time histories (``history_t_s``, ``history_r_mm`` and per-point lists
-``history_uz_um``, ``history_magnitude_um``; for a unit also ``history_center_um`` and
-``history_edge_um``, each [u_r, u_z, u_theta]). ``edge_radius_mm`` is the unit's outer radius
-(the solver's definition; null for datasets written before it was stored). The key of a row is
+outputs (:mod:`surrogate.data.columns`: magnitudes, complex amplitudes, profiles, transient
+histories, or complex sweeps over a band). The key of a row is
 (source, sample_id).
 """
 
@@ -54,6 +50,14 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from surrogate.data.columns import (
+    COMPLEX_FIELDS,
+    OUTPUT_FIELDS,
+    PROVENANCE_FIELDS,
+    arrow_schema,
+    profile_matrix,
+    recorded_schema,
+)
 from surrogate.data.digests import (
     PART_RE,
     TMP_RE,
@@ -70,6 +74,8 @@ from surrogate.data.space import Space, space_from_dict
 __all__ = [
     "FEM_SOURCE",
     "MANIFEST_NAME",
+    "OUTPUT_FIELDS",
+    "PROVENANCE_FIELDS",
     "SCHEMA_VERSION",
     "DatasetError",
     "Store",
@@ -85,41 +91,10 @@ MANIFEST_NAME = "_manifest.json"
 LOCK_NAME = "_lock"
 FEM_SOURCE = "hapticrom-fem"
 _PART_RE, _TMP_RE = PART_RE, TMP_RE
-_TYPES = {"float64": pa.float64(), "int64": pa.int64(), "string": pa.string(),
-          "bool": pa.bool_()}
-_F64_LIST = pa.list_(pa.float64())
-
-PROVENANCE_FIELDS = [
-    pa.field("sample_id", pa.string(), nullable=False),
-    pa.field("sample_index", pa.int64(), nullable=False),
-    pa.field("status", pa.string(), nullable=False),
-    pa.field("error", pa.string()),
-    pa.field("source", pa.string(), nullable=False),
-    pa.field("wall_s", pa.float64()),
-    pa.field("dofs", pa.int64()),
-    pa.field("elements", pa.int64()),
-    pa.field("solver_version", pa.string()),
-    pa.field("solver_hash", pa.string()),
-    pa.field("scene_json", pa.string()),
-    pa.field("warnings", pa.string()),
-]
-OUTPUT_FIELDS = [
-    pa.field("center_amplitude_um", pa.float64()),
-    pa.field("edge_amplitude_um", pa.float64()),
-    pa.field("normalized_edge", pa.float64()),
-    pa.field("edge_radius_mm", pa.float64()),
-    pa.field("profile_distance_mm", _F64_LIST),
-    pa.field("profile_uz_um", _F64_LIST),
-    pa.field("profile_magnitude_um", _F64_LIST),
-    pa.field("history_t_s", _F64_LIST),
-    pa.field("history_r_mm", _F64_LIST),
-    pa.field("history_uz_um", pa.list_(_F64_LIST)),
-    pa.field("history_magnitude_um", pa.list_(_F64_LIST)),
-    # transient unit runs: [u_r, u_z, u_theta] histories (um) at the center and edge points
-    pa.field("history_center_um", pa.list_(_F64_LIST)),
-    pa.field("history_edge_um", pa.list_(_F64_LIST)),
-]
 STATUSES = ("ok", "failed")
+#: Output columns added after datasets were first written: rows for a dataset that predates
+#: them are stored without them.
+_LATER_COLUMNS = frozenset(f.name for f in COMPLEX_FIELDS)
 
 
 class DatasetWarning(UserWarning):
@@ -129,12 +104,6 @@ class DatasetWarning(UserWarning):
 def utc_now() -> str:
     """Current UTC time, ISO 8601 with seconds."""
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-
-
-def arrow_schema(space: Space) -> pa.Schema:
-    """The fixed Arrow schema of a dataset over ``space``: provenance, parameters, outputs."""
-    params = [pa.field(p.name, _TYPES[p.column_type]) for p in space.parameters]
-    return pa.schema(PROVENANCE_FIELDS + params + OUTPUT_FIELDS)
 
 
 def _fsync_dir(path: Path) -> None:
@@ -251,8 +220,9 @@ class Store:
 
     @property
     def schema(self) -> pa.Schema:
-        """The Arrow schema every part must have."""
-        return arrow_schema(self.space)
+        """The Arrow schema every part must have: the columns the manifest records (a
+        dataset written before a column existed does not have it)."""
+        return recorded_schema(self.space, self.manifest)
 
     def save_manifest(self) -> None:
         """Write the (modified) manifest atomically."""
@@ -324,6 +294,9 @@ class Store:
         if isinstance(rows, pa.Table):
             table = rows.replace_schema_metadata(None).cast(self.schema)
         else:
+            later = _LATER_COLUMNS - set(self.schema.names)  # an older dataset: not stored
+            if later:
+                rows = [{k: v for k, v in r.items() if k not in later} for r in rows]
             table = rows_to_table(rows, self.schema)
         meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
         table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
@@ -427,22 +400,6 @@ def _py(value: Any) -> Any:
     return value
 
 
-def profile_matrix(df: Any, grid_mm: Sequence[float],
-                   column: str = "profile_magnitude_um") -> np.ndarray:
-    """Profiles of every row linearly interpolated onto ``grid_mm`` [mm]: an array of shape
-    (rows, len(grid)) in the column's unit, NaN where a row has no profile or the grid point
-    lies outside that row's distance range (no extrapolation)."""
-    grid = np.asarray(grid_mm, dtype=float)
-    out = np.full((len(df), grid.size), np.nan)
-    for i, (d, a) in enumerate(zip(df["profile_distance_mm"], df[column], strict=True)):
-        if d is None or a is None or len(d) == 0:
-            continue
-        d, a = np.asarray(d, dtype=float), np.asarray(a, dtype=float)
-        inside = (grid >= d.min()) & (grid <= d.max())
-        out[i, inside] = np.interp(grid[inside], d, a)
-    return out
-
-
 def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
     """The manifest entries of a new dataset over ``space`` computed by ``solver`` (a
     :func:`surrogate.data.provenance.solver_info` dict); pass them to :meth:`Store.create`."""
@@ -455,7 +412,10 @@ def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
         "solver_history": [dict(solver, first_used=utc_now())],
         "mesh": {**defaults.get("mesh", {}),
                  "varied_by_space": any(v.startswith("mesh.") for v in varied)},
-        "analysis_kind": ("varied" if "analysis.kind" in varied
+        "analysis_kind": ("sweep" if space.band is not None else "varied"
+                          if "analysis.kind" in varied
                           else defaults.get("analysis", {}).get("kind")),
         "profile_grid_mm": None,
+        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)}}
+           if space.band is not None else {}),
     }

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.columns import complex_columns, sweep_columns
 from surrogate.data.provenance import solver_info
 
 __all__ = ["edge_radius_mm", "outputs_from_result", "run_chunk", "run_sample",
@@ -61,8 +62,12 @@ def worker_solver_hash() -> str:
 
 def outputs_from_result(res: Any) -> dict[str, Any]:
     """Dataset output columns (amplitudes in um, distances in mm) of a
-    :class:`fem.simulation.SimulationResult`."""
+    :class:`fem.simulation.SimulationResult` (with the complex amplitudes of a harmonic or
+    static result) or of a sweep result (:func:`surrogate.data.columns.sweep_columns`)."""
     from fem.results import magnitude
+
+    if np.ndim(getattr(res, "frequency_hz", 0)) == 1:  # a sweep: one row holds the band
+        return sweep_columns(res)
 
     out: dict[str, Any] = {
         "center_amplitude_um": res.center_amplitude_um,
@@ -77,6 +82,13 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
         "warnings": "; ".join(str(w) for w in res.meta.get("warnings", [])) or None,
     }
     h = res.histories
+    if h is None:  # the harmonic steady state's complex amplitudes (static: real)
+        cols = complex_columns(np.asarray(res.center), np.asarray(res.edge),
+                               np.asarray(res.profile))
+        if res.edge_mm is None:  # a point force: no centre or edge of a unit
+            cols = {k: (None if k.startswith(("center_", "edge_")) else v)
+                    for k, v in cols.items()}
+        out.update(cols)
     if h is not None:
         probes = h.radii[: res.r_mm.size]
         out["history_t_s"] = h.t.tolist()

@@ -48,7 +48,7 @@ def _fresh(pristine, tmp_path, name="work"):
 def _readers(work, space, out):
     """Every library reader, each as a call that must raise DatasetError."""
     return {
-        "open": lambda: Store.open(work),
+        "open": lambda: Store.open(work).read(),
         "info": lambda: dataset_info(work),
         "generate": lambda: generate(space, 26, work, workers=1, progress=False),
         "train": lambda: load_datasets([work]),
