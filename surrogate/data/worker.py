@@ -30,12 +30,12 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
 
     Never raises for a bad sample: the exception becomes ``status = "failed"`` with its text.
     The result depends on the scene only."""
+    import fem
     from fem.scene import scene_from_dict
-    from fem.simulation import simulate
 
     t0 = time.perf_counter()
-    try:
-        out = outputs_from_result(simulate(scene_from_dict(scene)))
+    try:  # fem.simulate: a SimulationResult, or a SweepResult for a sweep scene
+        out = outputs_from_result(fem.simulate(scene_from_dict(scene)))
         bad = _non_finite(out)
         out["status"], out["error"] = ("failed", f"NonFiniteResult: {bad}") if bad else ("ok",
                                                                                          None)
