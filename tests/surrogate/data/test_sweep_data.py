@@ -209,9 +209,9 @@ def _edit_row(path: Path, column: str, change) -> None:
 @pytest.mark.parametrize("column, change, words", [
     ("sweep_profile_uz_im_um", lambda v: v[:-1], "sweep_profile_uz_im_um holds 95 values, "
      "expected 96"),
-    ("sweep_center_ur_re_um", lambda v: [float("nan")] + v[1:], "sweep_center_ur_re_um has "
+    ("sweep_center_ur_re_um", lambda v: [float("nan"), *v[1:]], "sweep_center_ur_re_um has "
      "non-finite"),
-    ("sweep_frequency_hz", lambda v: [v[0] + 1.0] + v[1:], "differs from the manifest's band"),
+    ("sweep_frequency_hz", lambda v: [v[0] + 1.0, *v[1:]], "differs from the manifest's band"),
     ("profile_distance_mm", lambda v: [x * 2 for x in v], "differs from the manifest's grid"),
     ("sweep_full_solves", lambda v: 0, "at least one solve"),
 ])
