@@ -18,7 +18,7 @@ import pytest
 
 from surrogate.data.columns import COMPONENTS, SWEEP_FIELDS, sweep_arrays
 from surrogate.data.digests import part_entry
-from surrogate.data.errors import SpaceError
+from surrogate.data.errors import DatasetError, SpaceError
 from surrogate.data.inspect import dataset_info, validate_dataset
 from surrogate.data.integrity import manifest_digest
 from surrogate.data.provenance import solver_info
@@ -240,3 +240,15 @@ def test_sweep_columns_cover_every_component():
     for where in ("center", "edge", "profile"):
         for c in COMPONENTS:
             assert {f"sweep_{where}_u{c}_re_um", f"sweep_{where}_u{c}_im_um"} <= names
+
+
+def test_ingest_refuses_a_sweep_dataset_and_writes_nothing(tmp_path):
+    from surrogate.data.ingest import ingest_table
+
+    path = _dataset(tmp_path / "d")
+    table = tmp_path / "t.csv"
+    table.write_text("skin_E_kPa,fat_thickness_mm,center_amplitude_um\n50,10,3.0\n")
+    before = {p.name: p.read_bytes() for p in path.iterdir()}
+    with pytest.raises(DatasetError, match="is a sweep dataset"):
+        ingest_table(table, path)
+    assert {p.name: p.read_bytes() for p in path.iterdir()} == before
