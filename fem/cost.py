@@ -25,7 +25,12 @@ from .absorbers import (
     reference_speed,
 )
 from .domain import MeshSpec
-from .problem import drive_omega, mesh_spec, resolve_effects, shortest_shear_wavelength
+from .problem import (
+    absorber_omega,
+    mesh_spec,
+    resolve_effects,
+    shortest_shear_wavelength,
+)
 from .scene import Scene, SceneError
 
 __all__ = ["DEFAULT_MAX_UNKNOWNS", "CostEstimate", "check_cost", "estimate_cost"]
@@ -74,7 +79,7 @@ def _absorber_cells(kind: str, end: float, size: float, model_size: float, lam_r
     """Cells of the region beyond ``end`` (see ``fem.domain.layered_domain``)."""
     if kind == "static":
         return 4.0 * math.log(STATIC_EXTENSION_FACTOR * size / max(end * 1e-3, 1e-12))
-    wavelengths = 1.0 if kind == "harmonic" else DAMPING_LAYER_WAVELENGTHS
+    wavelengths = 1.0 if kind in ("harmonic", "sweep") else DAMPING_LAYER_WAVELENGTHS
     start = max(end, min(lam_ref, 20.0 * model_size))
     extension = 0.0
     if start > end:  # graded from the last cell up to h_wave, then at h_wave
@@ -118,7 +123,7 @@ def estimate_cost(scene: Scene) -> CostEstimate:
     cells_z = _graded_cells(depth, 0.0, spec.near_size, spec.far_size, spec.growth)
     cells_z += slack * len(scene.tissue.layers)  # every interface is a line
     if kind != "static":
-        omega = drive_omega(scene)
+        omega = absorber_omega(scene)
         speeds = [ly.solid().shear_speed_m_s for ly in scene.tissue.layers]
         lam_ref = 2 * math.pi * reference_speed(speeds) / omega
         lam_min, _ = shortest_shear_wavelength(scene)

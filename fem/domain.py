@@ -132,7 +132,8 @@ class Domain:
 def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side: str, base: str,
                    spec: MeshSpec, analysis: str, omega: float = 0.0,
                    r_breaks: Sequence[float] = (), blocks: Sequence[Block] = (),
-                   damping_rate: float | None = None, z_breaks: Sequence[float] = ()) -> Domain:
+                   damping_rate: float | None = None, z_breaks: Sequence[float] = (),
+                   absorber_omega: float | None = None) -> Domain:
     """Mesh layered tissue (top to bottom: (thickness m, Material)) with the treatments asked for.
 
     Args:
@@ -141,7 +142,10 @@ def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side
         base: "fixed" | "absorbing" | "free" bottom boundary.
         spec: element sizes and order.
         analysis: "static" | "harmonic" | "transient" (decides the absorber).
-        omega: angular frequency (rad/s) for harmonic/transient absorber tuning.
+        omega: angular frequency (rad/s) the elements are sized for (the shortest wavelength)
+            and the absorbers are tuned for.
+        absorber_omega: angular frequency (rad/s) whose wavelength sets the absorbers' extent
+            (default ``omega``); a sweep passes its lowest, so that one mesh serves the band.
         r_breaks: radii (m) that must be cell lines (load edges, unit radii).
         z_breaks: depths (m, negative) above the skin that must be cell lines (rotor plane).
         blocks: rectangles above the skin (z < 0) or replacing tissue.
@@ -171,7 +175,8 @@ def layered_domain(layers: Sequence[tuple[float, Material]], radius: float, side
     wave = analysis != "static"
     lam_min = float(c_s.min()) * 2 * np.pi / omega if wave else np.inf
     h_wave = lam_min * spec.order / absorbers.ELEMENTS_PER_WAVELENGTH
-    lam_ref = absorbers.reference_speed(c_s) * 2 * np.pi / omega if wave else np.inf
+    lam_ref = (absorbers.reference_speed(c_s) * 2 * np.pi / (absorber_omega or omega) if wave
+               else np.inf)
 
     def beyond(end: float, lines: NDArray, size: float, kind: str) -> absorbers.AxisLayout:
         h_last = float(lines[-1] - lines[-2])

@@ -66,7 +66,8 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
     u = scene.unit
     erm = scene.load.kind == LoadKind.UNIT
     available = {
-        "inertia": (scene.analysis.kind != "static", "analysis.kind = 'harmonic' or 'transient'"),
+        "inertia": (scene.analysis.kind != "static",
+                    "analysis.kind = 'harmonic', 'sweep' or 'transient'"),
         "hysteretic_damping": (_has_loss(scene), "a layer or ring with loss_factor > 0"),
         "encapsulation": (u is not None and len(u.encapsulation) > 0, "unit.encapsulation rings"),
         "pogo": (u is not None and u.attachment == "pogo", "unit.attachment = 'pogo'"),
@@ -147,11 +148,19 @@ def mesh_spec(scene: Scene) -> MeshSpec:
 
 
 def drive_omega(scene: Scene) -> float:
-    """Angular frequency (rad/s) the absorbers are tuned for: the analysis frequency, or for a
-    transient ERM the motor's rated speed."""
+    """Angular frequency (rad/s) the mesh is sized for and the absorbers are tuned for: the
+    analysis frequency (a sweep's highest), or for a transient ERM the motor's rated speed."""
     if scene.analysis.kind == "transient" and scene.load.kind == LoadKind.UNIT:
         return 2 * np.pi * scene.unit.motor.rated_frequency_hz
     return 2 * np.pi * scene.analysis.frequency_hz
+
+
+def absorber_omega(scene: Scene) -> float:
+    """Angular frequency (rad/s) whose wavelength sets the absorbers' extent: a sweep's
+    lowest frequency (the longest wave of its band), else :func:`drive_omega`."""
+    if scene.analysis.kind == "sweep":
+        return 2 * np.pi * min(scene.analysis.frequencies_hz)
+    return drive_omega(scene)
 
 
 def build_problem(scene: Scene) -> Problem:
@@ -160,7 +169,8 @@ def build_problem(scene: Scene) -> Problem:
     hyst = effects["hysteretic_damping"]
     layers = [(ly.thickness_m, ly.solid(hyst)) for ly in scene.tissue.layers]
     dynamic = effects["inertia"]
-    analysis = scene.analysis.kind if dynamic else "static"
+    analysis = {"sweep": "harmonic"}.get(scene.analysis.kind, scene.analysis.kind)
+    analysis = analysis if dynamic else "static"
     omega = drive_omega(scene) if dynamic else 0.0
     lay = None
     r_breaks, blocks, z_breaks = [], (), ()
@@ -173,7 +183,8 @@ def build_problem(scene: Scene) -> Problem:
     try:
         domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
                                 scene.tissue.base, mesh_spec(scene), analysis, omega, r_breaks,
-                                blocks, z_breaks=z_breaks)
+                                blocks, z_breaks=z_breaks,
+                                absorber_omega=absorber_omega(scene) if dynamic else None)
     except CellPlanError as err:
         raise SceneError(f"mesh.cells_{err.axis}", f"mesh.cells_{err.axis}: {err}") from None
     if lay is not None and lay.contact_ties is not None:
@@ -182,7 +193,7 @@ def build_problem(scene: Scene) -> Problem:
     extra = ()
     if lay is not None and lay.pins is not None:
         extra = (("pogo pins", *haptic_unit.pin_spring(domain, mode, lay.pins)),)
-    steady_omega = omega if scene.analysis.kind == "harmonic" else 0.0
+    steady_omega = omega if scene.analysis.kind in ("harmonic", "sweep") else 0.0
     return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay), extra,
                    _edge(scene, lay), effects, scene.unit, lay)
 

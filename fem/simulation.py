@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from . import SOLVER_VERSION, results, transient_analysis
+from . import SOLVER_VERSION, probes, results, transient_analysis
 from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .domain import Domain
 from .haptic_unit import pin_contact_check
@@ -182,10 +182,9 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     problem = build_problem(scene)
     log = OperatorLog()
     edge = problem.edge
-    r_probe = np.asarray(scene.output.radii_m)
-    prof_mm, cut = _profile_distances_mm(scene, edge or 0.0)
-    radii = np.concatenate([r_probe, [0.0, edge or 0.0], (edge or 0.0) + prof_mm * 1e-3])
-    stencil = _stencil(problem, radii, r_probe.size)
+    pts = probes.output_points(scene, problem)
+    r_probe, prof_mm, cut, radii, stencil = (pts.r_probe, pts.profile_mm, pts.cut, pts.radii,
+                                             pts.stencil)
     histories, extras = None, {}
     if scene.analysis.kind == "transient":
         histories = transient_analysis.run(scene, problem, stencil, radii, log, progress)
@@ -218,37 +217,6 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
                             prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras,
                             centre_z_mm)
-
-
-def _stencil(problem: Problem, radii: NDArray, center_index: int) -> tuple[NDArray, NDArray]:
-    """Interpolation stencil of the skin surface at ``radii``, except the center point
-    (index ``center_index``), which sits on the unit's skin-side face (see
-    ``fem.haptic_unit``)."""
-    nodes, weights = results.surface_stencil(problem.domain, radii)
-    lay = problem.layout
-    if lay is not None and lay.contact_z != 0.0:
-        c_nodes, c_weights = results.surface_stencil(problem.domain, [0.0], lay.contact_z,
-                                                     side="above")
-        nodes, weights = nodes.copy(), weights.copy()
-        nodes[center_index], weights[center_index] = c_nodes[0], c_weights[0]
-    return nodes, weights
-
-
-def _profile_distances_mm(scene: Scene, edge: float) -> tuple[NDArray, str | None]:
-    """Distances from the edge (mm) of the profile, within the meshed radius, and a warning
-    naming the keys when the requested length had to be cut to the model."""
-    out = scene.output
-    n = int(np.floor(out.profile_length_mm / out.profile_step_mm + 1e-9))
-    d = out.profile_step_mm * np.arange(n + 1)
-    kept = d[edge + d * 1e-3 <= scene.tissue.radius_m * (1 + 1e-12)]
-    if kept.size == d.size:
-        return kept, None
-    room = (scene.tissue.radius_m - edge) * 1e3
-    return kept, (f"output.profile_length_mm = {out.profile_length_mm:g} reaches beyond the "
-                  f"model: cut to {kept[-1] if kept.size else 0.0:g} mm (tissue.radius_mm = "
-                  f"{scene.tissue.radius_m * 1e3:g} less the edge radius "
-                  f"{edge * 1e3:g} mm leaves {room:g} mm); raise tissue.radius_mm or lower "
-                  "output.profile_length_mm")
 
 
 def resolution_warning(scene: Scene, problem: Problem) -> str | None:

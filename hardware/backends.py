@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from hardware.device import Device
 from hardware.safety import ExposureMeter, SafetyLimits
@@ -25,14 +26,15 @@ def parse_device(text: str) -> tuple[str, str | None]:
 
 def open_device(text: str, plan: PlanFile, out_dir: Path | None,
                 limits: SafetyLimits | None = None,
-                exposure: ExposureMeter | None = None) -> Device:
+                exposure: ExposureMeter | None = None, record: Any = None) -> Device:
     """The device ``text`` names, sized to the plan; ``sim`` and ``log`` write into
-    ``out_dir`` (``field-peak.png`` and ``field.gif``; ``commands.jsonl``)."""
+    ``out_dir`` (``field-peak.png`` and ``field.gif``; ``commands.jsonl``); ``serial`` keeps
+    its session's events in ``record`` (a :class:`hardware.playback.JsonLines`) if given."""
     kind, port = parse_device(text)
     if kind == "serial":
         from hardware.serial_device import SerialDevice
 
-        return SerialDevice(port, plan.n_sites, limits, exposure)
+        return SerialDevice(port, plan.n_sites, limits, exposure, record=record)
     if out_dir is None:
         raise ValueError(f"--device {kind} writes files: give --out DIR")
     if kind == "log":

@@ -17,19 +17,43 @@ from __future__ import annotations
 import time
 from abc import ABC, abstractmethod
 from types import TracebackType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from fieldspec import FieldError
 from hardware.protocol import Segment, Status
 from hardware.safety import ExposureMeter, OnTimeGuard, SafetyLimits, check_schedule, clamp_levels
+
+if TYPE_CHECKING:
+    from hardware.limits import DeviceLimits
 from hardware.schedule import Schedule
 
-__all__ = ["Device", "DeviceError"]
+__all__ = ["Device", "DeviceError", "DeviceRefused", "PlaybackInterrupted"]
 
 
 class DeviceError(RuntimeError):
     """The link to the device failed (no acknowledgement, disconnected, refused)."""
+
+
+class DeviceRefused(FieldError):
+    """The device refused a command before anything of it was played (a NAK naming why):
+    bad input for this device, not a failure of the link (``field`` is ``device``)."""
+
+    def __init__(self, message: str, code: str) -> None:
+        super().__init__("device", message)
+        self.code = code
+
+
+class PlaybackInterrupted(DeviceError):
+    """The schedule was cut short (watchdog or on-time stop reported by the device, lost
+    link, NAK while playing); ``report`` says what was and was not played
+    (:func:`hardware.playback.playback_report`)."""
+
+    def __init__(self, report: dict[str, Any]) -> None:
+        super().__init__(report["summary"])
+        self.report = report
 
 
 class Device(ABC):
@@ -47,6 +71,21 @@ class Device(ABC):
         self.exposure = exposure
         self.guard = OnTimeGuard(self.limits)
         self.closed = False
+        self._accrued_ms = 0.0  # how much of the schedule playing now has been dosed
+
+    def reported_limits(self) -> DeviceLimits | None:
+        """The limits the device reports of itself (None: it reports none)."""
+        return None
+
+    def set_limits(self, limits: SafetyLimits) -> None:
+        """Use ``limits`` from now on (:func:`hardware.limits.resolve_limits`)."""
+        self.limits = limits
+        self.guard = OnTimeGuard(limits)
+
+    def note(self, event: str, **info: Any) -> None:
+        """Record an event (a refusal, an interruption, the plan's integrity) where the back
+        end keeps a record (the ``log`` device writes it as a line); others ignore it."""
+        return None
 
     # ---- public API (safety first) ----------------------------------------------------------
 
@@ -70,10 +109,19 @@ class Device(ABC):
         dur_s = np.array([s.duration_ms for s in schedule.steps]) * 1e-3
         if self.exposure is not None and len(amp_m):
             self.exposure.check(amp_m, schedule.frequency_hz, dur_s)
+        self._accrued_ms = 0.0
         self._play(schedule, segs)
-        if self.exposure is not None and len(amp_m):
-            self.exposure.record(amp_m, schedule.frequency_hz, dur_s)
+        self.accrue(schedule, schedule.total_ms)
         return segs
+
+    def accrue(self, schedule: Schedule, t_ms: float) -> None:
+        """Add the exposure of ``schedule`` from where the last call left off up to ``t_ms``
+        after its start to the meter (written through to its file): a back end that plays in
+        real time calls this as it plays, so a crash loses at most the last interval."""
+        if self.exposure is None or t_ms <= self._accrued_ms or not schedule.steps:
+            return
+        self.exposure.accrue(schedule, self._accrued_ms, t_ms)
+        self._accrued_ms = t_ms
 
     def stop_all(self) -> None:
         """Every channel to zero."""

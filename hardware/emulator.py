@@ -7,7 +7,13 @@ hardware. It enforces the rules docs/protocol.md asks of the firmware:
 * watchdog: no HEARTBEAT for ``watchdog_s`` -> every channel stopped and the schedule
   dropped, within one ``tick_s`` of the deadline;
 * on-time: a channel running without a pause for ``max_on_s`` is stopped;
-* levels beyond ``max_level`` and schedule segments longer than ``max_on_s`` are refused.
+* levels beyond ``max_level`` and schedule segments longer than ``max_on_s`` are refused;
+* STATUS reports its own limits (``max_level``, ``max_on_s``) besides the watchdog time.
+
+Defaults are the actuator's rated limits, as the firmware's must be: ``max_level`` =
+maximum / rated voltage of the ERM (:data:`DEFAULT_MAX_LEVEL`, 4.5 V / 3.3 V = 1.364;
+:data:`hardware.limits.ERM_RATING` says where the numbers come from), ``max_on_s`` 10 s and
+``watchdog_s`` 0.25 s (the host's defaults, project choices).
 
 :class:`EmulatedArray` is the state machine (time passed in, so tests can drive it with a
 fake clock); :class:`PtyEmulator` runs it in a thread behind a pseudo-terminal
@@ -24,9 +30,11 @@ import time
 import tty
 from dataclasses import dataclass, field
 
+from hardware.limits import ERM_RATING
 from hardware.protocol import (
     APPEND,
     FRAME_TIMEOUT_S,
+    LEVEL_SCALE,
     ST_ON_TIME,
     ST_PLAYING,
     ST_WATCHDOG,
@@ -46,7 +54,12 @@ from hardware.protocol import (
     encode_status,
 )
 
-__all__ = ["EmulatedArray", "Event", "PtyEmulator"]
+__all__ = ["DEFAULT_MAX_LEVEL", "DEFAULT_MAX_ON_S", "DEFAULT_WATCHDOG_S", "EmulatedArray",
+           "Event", "PtyEmulator"]
+
+DEFAULT_MAX_LEVEL = round(ERM_RATING.max_voltage_V / ERM_RATING.rated_voltage_V, 4)
+DEFAULT_MAX_ON_S = 10.0
+DEFAULT_WATCHDOG_S = 0.25
 
 
 @dataclass(frozen=True)
@@ -64,10 +77,11 @@ class EmulatedArray:
     """The firmware's state machine."""
 
     n_channels: int
-    watchdog_s: float
-    max_on_s: float
-    max_level: float = 8.0
+    watchdog_s: float = DEFAULT_WATCHDOG_S
+    max_on_s: float = DEFAULT_MAX_ON_S
+    max_level: float = DEFAULT_MAX_LEVEL
     start_time: float = 0.0
+    report_limits: bool = True  # False: a firmware of the shorter STATUS (no limits in it)
     levels: list[float] = field(init=False)
     events: list[Event] = field(default_factory=list)
     received: list[tuple[float, Frame | FrameError]] = field(default_factory=list)
@@ -124,8 +138,10 @@ class EmulatedArray:
             elif f.type == Msg.STOP_ALL:
                 self._stop_all(now, "stop")
             elif f.type == Msg.QUERY_STATUS:
+                limits = (self.max_level, min(round(self.max_on_s * 1e3), 65535)) \
+                    if self.report_limits else (None, None)
                 status = Status(self.flags | (ST_PLAYING if self.t0 is not None else 0),
-                                round(self.watchdog_s * 1e3), tuple(self.levels))
+                                round(self.watchdog_s * 1e3), tuple(self.levels), *limits)
                 self.flags = 0
                 return encode(Msg.STATUS, f.seq, encode_status(status))
             elif f.type == Msg.SET_LEVELS:
@@ -155,7 +171,7 @@ class EmulatedArray:
         for ch, v in items:
             if not 0 <= ch < self.n_channels:
                 return ErrorCode.BAD_CHANNEL
-            if abs(v) > self.max_level:
+            if abs(v) > self.max_level + 1 / LEVEL_SCALE:  # one wire step of rounding
                 return ErrorCode.LEVEL_RANGE
         return None
 
@@ -188,14 +204,15 @@ class PtyEmulator:
     """:class:`EmulatedArray` behind a pseudo-terminal, in a thread (a context manager).
     ``port`` is the path a host opens (``serial.Serial(port)``)."""
 
-    def __init__(self, n_channels: int, watchdog_s: float = 0.25, max_on_s: float = 10.0,
-                 max_level: float = 8.0, tick_s: float = 0.001) -> None:
+    def __init__(self, n_channels: int, watchdog_s: float = DEFAULT_WATCHDOG_S,
+                 max_on_s: float = DEFAULT_MAX_ON_S, max_level: float = DEFAULT_MAX_LEVEL,
+                 tick_s: float = 0.001, report_limits: bool = True) -> None:
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         self.port = os.ttyname(self.slave)
         self.tick_s = tick_s
         self.array = EmulatedArray(n_channels, watchdog_s, max_on_s, max_level,
-                                   start_time=time.monotonic())
+                                   start_time=time.monotonic(), report_limits=report_limits)
         self.lock = threading.Lock()
         self.decoder = Decoder()
         self.last_byte = time.monotonic()

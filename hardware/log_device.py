@@ -2,7 +2,9 @@
 
 Each line holds ``t_s`` (seconds since the device was opened, monotonic clock), ``utc`` (ISO
 8601 wall-clock time) and ``command`` (``open``, ``set_levels``, ``play``, ``stop_all``,
-``heartbeat``, ``status``, ``close``) with the command's arguments: levels per channel
+``heartbeat``, ``status``, ``close``; and the host's events: ``limits`` in force with their
+owners, the plan's integrity, ``refused`` with the field, value and limit, ``interrupted``
+with what was and was not played) with the command's arguments: levels per channel
 (fractions of nominal), and for ``play`` the steps (start, duration [ms], levels, rendered
 site amplitudes [um]) and the segments ``[t_ms, duration_ms, channel, level]`` as sent.
 The file is flushed after every line, so a crash keeps everything up to it.
@@ -10,9 +12,6 @@ The file is flushed after every line, so a crash keeps everything up to it.
 
 from __future__ import annotations
 
-import json
-import time
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from hardware.device import Device
+from hardware.playback import JsonLines
 from hardware.protocol import Segment, Status
 from hardware.safety import ExposureMeter, SafetyLimits
 from hardware.schedule import Schedule
@@ -38,17 +38,17 @@ class LogDevice(Device):
                  exposure: ExposureMeter | None = None) -> None:
         super().__init__(n_channels, limits, exposure)
         self.path = Path(path)
-        self.file = self.path.open("w", encoding="utf-8")
-        self.t_open = time.monotonic()
+        self.record = JsonLines(self.path)
         self.levels = np.zeros(n_channels)
-        self._write("open", n_channels=n_channels, limits=vars(self.limits))
+        # limits not given: the caller sets them next (set_limits, then a ``limits`` line)
+        self._write("open", n_channels=n_channels,
+                    limits=None if limits is None else vars(self.limits))
 
     def _write(self, command: str, **args: Any) -> None:
-        line = {"t_s": round(time.monotonic() - self.t_open, 6),
-                "utc": datetime.now(UTC).isoformat(timespec="microseconds"),
-                "command": command, **args}
-        self.file.write(json.dumps(line) + "\n")
-        self.file.flush()
+        self.record.write(command, **args)
+
+    def note(self, event: str, **info: Any) -> None:
+        self._write(event, **info)
 
     def _set_levels(self, levels: NDArray) -> None:
         self.levels = levels.copy()
@@ -76,4 +76,4 @@ class LogDevice(Device):
 
     def _close(self) -> None:
         self._write("close")
-        self.file.close()
+        self.record.close()

@@ -69,7 +69,8 @@ class Msg(IntEnum):
     QUERY_STATUS = 0x05  # empty
     ACK = 0x80  # payload: u8 sequence number acknowledged
     NAK = 0x81  # payload: u8 sequence number refused, u8 ErrorCode
-    STATUS = 0x82  # payload: u8 flags, u8 channels, u16 watchdog_ms, channels x i16 level
+    STATUS = 0x82  # payload: u8 flags, u8 channels, u16 watchdog_ms, channels x i16 level,
+    # then (optional) the device's own limits: i16 max_level, u16 max_on_ms
 
 
 class ErrorCode(IntEnum):
@@ -260,32 +261,50 @@ def decode_nak(payload: bytes) -> tuple[int, ErrorCode]:
 
 @dataclass(frozen=True)
 class Status:
-    """A device's state: ``flags`` (ST_*), watchdog time [ms], present level per channel."""
+    """A device's state: ``flags`` (ST_*), watchdog time [ms], present level per channel,
+    and the device's own limits when it reports them (``max_level`` in levels, ``max_on_ms``
+    the longest continuous on-time per channel [ms]; None: not reported)."""
 
     flags: int
     watchdog_ms: int
     levels: tuple[float, ...]
+    max_level: float | None = None
+    max_on_ms: int | None = None
 
     @property
     def watchdog_tripped(self) -> bool:
         return bool(self.flags & ST_WATCHDOG)
 
     @property
+    def on_time_tripped(self) -> bool:
+        return bool(self.flags & ST_ON_TIME)
+
+    @property
     def playing(self) -> bool:
         return bool(self.flags & ST_PLAYING)
 
 
+STATUS_LIMITS = struct.Struct("<hH")  # the optional tail of STATUS: max_level, max_on_ms
+
+
 def encode_status(status: Status) -> bytes:
     n = len(status.levels)
-    return struct.pack("<BBH", status.flags, n, status.watchdog_ms) + b"".join(
+    out = struct.pack("<BBH", status.flags, n, status.watchdog_ms) + b"".join(
         struct.pack("<h", to_level(v)) for v in status.levels)
+    if status.max_level is not None:
+        out += STATUS_LIMITS.pack(to_level(status.max_level), status.max_on_ms or 0)
+    return out
 
 
 def decode_status(payload: bytes) -> Status:
     if len(payload) < 4:
         raise ValueError("STATUS payload too short")
     flags, n, wd = struct.unpack_from("<BBH", payload)
-    if len(payload) != 4 + 2 * n:
+    end = 4 + 2 * n
+    if len(payload) not in (end, end + STATUS_LIMITS.size):
         raise ValueError("STATUS payload size does not match its channel count")
-    levels = tuple(from_level(q) for (q,) in struct.iter_unpack("<h", payload[4:]))
-    return Status(flags, wd, levels)
+    levels = tuple(from_level(q) for (q,) in struct.iter_unpack("<h", payload[4:end]))
+    if len(payload) == end:
+        return Status(flags, wd, levels)
+    q, on_ms = STATUS_LIMITS.unpack_from(payload, end)
+    return Status(flags, wd, levels, from_level(q), on_ms or None)

@@ -27,38 +27,50 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from datetime import date
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from fieldspec import FieldError
 from hardware.protocol import Segment
 
-__all__ = ["EXPOSURE_ACTION_VALUE", "EXPOSURE_LIMIT_VALUE", "ExposureMeter", "OnTimeGuard",
-           "SafetyError", "SafetyLimits", "a8", "acceleration_rms", "check_schedule",
+__all__ = ["ACCRUE_S", "EXPOSURE_ACTION_VALUE", "EXPOSURE_LIMIT_VALUE", "ExposureMeter",
+           "OnTimeGuard", "SafetyError", "SafetyLimits", "a8", "acceleration_rms", "check_schedule",
            "clamp_levels", "wh_weight"]
 
 EXPOSURE_ACTION_VALUE = 2.5  # m/s^2 A(8), Directive 2002/44/EC Art. 3(1)(b), hand-arm
 EXPOSURE_LIMIT_VALUE = 5.0  # m/s^2 A(8), Directive 2002/44/EC Art. 3(1)(a), hand-arm
 T0_S = 8 * 3600.0  # reference duration of A(8): 8 h (ISO 5349-1, 2002/44/EC)
+ACCRUE_S = 0.25  # a real-time back end adds the exposure played at least this often [s]
+LEVEL_TOLERANCE = 5e-4  # levels are written with 4 decimals (a plan's overdrive_level)
 
 
-class SafetyError(ValueError):
-    """A command the safety limits refuse (``field`` names the limit or the input)."""
+class SafetyError(FieldError):
+    """A command the safety limits refuse: ``field`` names the limit or the input; ``value``,
+    ``limit`` and ``owner`` (who set the limit) when known."""
 
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field
+    def __init__(self, field: str, message: str, *, value: float | None = None,
+                 limit: float | None = None, owner: str | None = None,
+                 t_ms: float | None = None) -> None:
+        super().__init__(field, message)
+        self.value, self.limit, self.owner, self.t_ms = value, limit, owner, t_ms
+
+    def to_dict(self) -> dict[str, object]:
+        return {"field": self.field, "value": self.value, "limit": self.limit,
+                "owner": self.owner, "message": str(self)}
 
 
 @dataclass(frozen=True)
 class SafetyLimits:
     """Host-side limits (levels are fractions of the nominal drive level).
 
-    ``max_level``: 1.0 = nominal; a plan's overdrive and brake pulses need its
-    ``overdrive_level`` (the motor's rated limit over nominal, from the plan's timing).
+    ``max_level``: 1.0 = nominal; the limit in force comes from the device, the actuator's
+    rated voltage and the user (:func:`hardware.limits.resolve_limits`), never from a plan.
     ``max_on_s`` (10 s), ``duty_window_s`` (60 s), ``max_duty`` (0.5), ``watchdog_s``
     (0.25 s): project choices, no published source (module docstring).
     """
@@ -102,12 +114,17 @@ def _on_intervals(segments: list[Segment], channel: int) -> list[tuple[int, int]
 
 
 def check_schedule(segments: list[Segment], limits: SafetyLimits) -> list[Segment]:
-    """The segments with levels clamped; raises :class:`SafetyError` if a channel would run
-    longer than ``max_on_s`` without a pause, or more than ``max_duty`` of any
-    ``duty_window_s`` window."""
-    out = [Segment(s.t_ms, s.duration_ms, s.channel,
-                   float(np.clip(s.level, -limits.max_level, limits.max_level)))
-           for s in segments]
+    """The segments, checked: raises :class:`SafetyError` if a level is beyond ``max_level``
+    (refused, never clipped: a clipped overdrive or brake is not the stimulus that was asked
+    for), if a channel would run longer than ``max_on_s`` without a pause, or more than
+    ``max_duty`` of any ``duty_window_s`` window."""
+    out = list(segments)
+    for s in out:
+        if not math.isfinite(s.level) or abs(s.level) > limits.max_level + LEVEL_TOLERANCE:
+            raise SafetyError("max_level", f"channel {s.channel} would be driven at level "
+                              f"{s.level:g} from t = {s.t_ms} ms: the limit is "
+                              f"{limits.max_level:.4g}", value=abs(s.level),
+                              limit=limits.max_level, t_ms=s.t_ms)
     window_ms = limits.duty_window_s * 1e3
     for ch in sorted({s.channel for s in out}):
         spans = _on_intervals(out, ch)
@@ -115,13 +132,15 @@ def check_schedule(segments: list[Segment], limits: SafetyLimits) -> list[Segmen
             if b - a > limits.max_on_s * 1e3:
                 raise SafetyError("max_on_s", f"channel {ch} would run {(b - a) / 1e3:g} s "
                                   f"without a pause from t = {a} ms: the limit is "
-                                  f"{limits.max_on_s:g} s")
+                                  f"{limits.max_on_s:g} s", value=(b - a) / 1e3,
+                                  limit=limits.max_on_s, t_ms=a)
         for a, _ in spans:  # the busiest window starts where some interval starts
             busy = sum(max(0.0, min(e, a + window_ms) - max(s, a)) for s, e in spans)
             if busy > limits.max_duty * window_ms + 1e-9:
                 raise SafetyError("max_duty", f"channel {ch} would be on {busy / window_ms:.0%} "
                                   f"of the {limits.duty_window_s:g} s from t = {a} ms: the "
-                                  f"limit is {limits.max_duty:.0%}")
+                                  f"limit is {limits.max_duty:.0%}", value=busy / window_ms,
+                                  limit=limits.max_duty, t_ms=a)
     return out
 
 
@@ -177,8 +196,16 @@ def a8(a_hw: NDArray, duration_s: NDArray) -> float:
 
 @dataclass
 class ExposureMeter:
-    """Per-site accumulated sum of a_hw^2 T [m^2/s^3] for one day; optionally kept in a JSON
-    file (``state_path``) so that separate sessions of the same day add up."""
+    """Per-site accumulated sum of a_hw^2 T [m^2/s^3] for one day; optionally kept in a file
+    (``state_path``) so that separate sessions of the same day add up.
+
+    The file is append-only JSON lines, written through: every exposure added is one line
+    ``{"date": "YYYY-MM-DD", "dose": [per site]}`` (an increment), flushed and fsync'd before
+    the call returns, so a host killed with ``kill -9`` loses at most the exposure since the
+    last line (a real-time back end adds one at least every :data:`ACCRUE_S`). Reading sums
+    today's lines of the same site count; the earlier layout (one object holding the day's
+    total) is one such line. A line that is not that is refused naming the file and the line
+    (a line torn by a crash while it was written is ignored)."""
 
     n_sites: int
     limit: float = EXPOSURE_ACTION_VALUE
@@ -188,21 +215,50 @@ class ExposureMeter:
     def __post_init__(self) -> None:
         self.dose = np.zeros(self.n_sites)
         if self.state_path is not None and Path(self.state_path).exists():
-            state = json.loads(Path(self.state_path).read_text())
-            if state.get("date") == date.today().isoformat() and len(state["dose"]) == \
-                    self.n_sites:
-                self.dose = np.asarray(state["dose"], dtype=float)
+            self.dose = self._read(Path(self.state_path))
+
+    def _read(self, path: Path) -> NDArray:
+        total = np.zeros(self.n_sites)
+        today = date.today().isoformat()
+        lines = path.read_text(encoding="utf-8").split("\n")
+        for i, line in enumerate(lines, 1):
+            if not line.strip():
+                continue
+            try:
+                state = json.loads(line)
+            except (json.JSONDecodeError, RecursionError):
+                if line.startswith('{"date"') and not line.rstrip().endswith("}"):
+                    continue  # a line torn by a crash while it was written
+                raise SafetyError("exposure-file", f"--exposure-file {path}: line {i} is not "
+                                  "JSON; expected {\"date\": \"YYYY-MM-DD\", \"dose\": [...]} "
+                                  "per line") from None
+            dose = state.get("dose") if isinstance(state, dict) else None
+            if not isinstance(state, dict) or not isinstance(state.get("date"), str) or \
+                    not isinstance(dose, list) or not all(
+                        isinstance(v, int | float) and not isinstance(v, bool) and
+                        math.isfinite(v) and v >= 0 for v in dose):
+                raise SafetyError("exposure-file", f"--exposure-file {path}: line {i} needs "
+                                  "'date' (YYYY-MM-DD) and 'dose' (a list of numbers >= 0, "
+                                  "one per site, m^2/s^3)")
+            if state["date"] == today and len(dose) == self.n_sites:
+                total += np.asarray(dose, dtype=float)
+        return total
 
     def a8(self) -> NDArray:
         """A(8) per site so far today [m/s^2]."""
         return np.sqrt(self.dose / T0_S)
 
+    def increment(self, site_amplitude_m: NDArray, frequency_hz: float,
+                  duration_s: NDArray) -> NDArray:
+        """The dose of exposures (rows: successive steps, columns: sites)."""
+        a_hw = wh_weight(frequency_hz) * acceleration_rms(site_amplitude_m, frequency_hz)
+        t = np.asarray(duration_s, dtype=float).reshape(-1, 1)
+        return (np.atleast_2d(a_hw) ** 2 * t).sum(axis=0)
+
     def added(self, site_amplitude_m: NDArray, frequency_hz: float,
               duration_s: NDArray) -> NDArray:
         """The dose after exposures (rows: successive steps, columns: sites)."""
-        a_hw = wh_weight(frequency_hz) * acceleration_rms(site_amplitude_m, frequency_hz)
-        t = np.asarray(duration_s, dtype=float).reshape(-1, 1)
-        return self.dose + (np.atleast_2d(a_hw) ** 2 * t).sum(axis=0)
+        return self.dose + self.increment(site_amplitude_m, frequency_hz, duration_s)
 
     def check(self, site_amplitude_m: NDArray, frequency_hz: float,
               duration_s: NDArray) -> NDArray:
@@ -212,12 +268,35 @@ class ExposureMeter:
             k = int(after.argmax())
             raise SafetyError("exposure", f"site {k} would reach A(8) = {after[k]:.3g} m/s^2 "
                               f"today: the daily exposure action value is {self.limit:g} "
-                              "m/s^2 (ISO 5349-1 weighting, Directive 2002/44/EC)")
+                              "m/s^2 (ISO 5349-1 weighting, Directive 2002/44/EC)",
+                              value=float(after[k]), limit=self.limit)
         return after
 
     def record(self, site_amplitude_m: NDArray, frequency_hz: float,
                duration_s: NDArray) -> None:
-        self.dose = self.added(site_amplitude_m, frequency_hz, duration_s)
+        """Add exposures to the day's dose (and to the file, written through)."""
+        self._add(self.increment(site_amplitude_m, frequency_hz, duration_s))
+
+    def accrue(self, schedule: Any, t_from_ms: float, t_to_ms: float) -> None:
+        """Add the exposure of ``schedule`` (its steps' rendered site amplitudes [um]) between
+        ``t_from_ms`` and ``t_to_ms`` after its start."""
+        amp = np.array([s.rendered_um for s in schedule.steps]) * 1e-6
+        start = np.array([s.start_ms for s in schedule.steps], dtype=float)
+        end = start + np.array([s.duration_ms for s in schedule.steps], dtype=float)
+        overlap_s = np.clip(np.minimum(end, t_to_ms) - np.maximum(start, t_from_ms), 0, None)
+        if overlap_s.any():
+            self._add(self.increment(amp, schedule.frequency_hz, overlap_s * 1e-3))
+
+    def _add(self, inc: NDArray) -> None:
+        self.dose = self.dose + inc
         if self.state_path is not None:
-            Path(self.state_path).write_text(json.dumps(
-                {"date": date.today().isoformat(), "dose": self.dose.tolist()}))
+            line = json.dumps({"date": date.today().isoformat(),
+                               "dose": [float(f"{v:.9g}") for v in inc]})
+            fd = os.open(self.state_path, os.O_RDWR | os.O_APPEND | os.O_CREAT, 0o644)
+            try:
+                size = os.fstat(fd).st_size
+                torn = size and os.pread(fd, 1, size - 1) != b"\n"  # a crash cut the last line
+                os.write(fd, (("\n" if torn else "") + line + "\n").encode("utf-8"))
+                os.fsync(fd)
+            finally:
+                os.close(fd)

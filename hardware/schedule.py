@@ -30,6 +30,7 @@ from fieldspec import FieldError
 from hardware.pattern import Pattern, PatternError
 from hardware.protocol import Segment
 from planner.drive import drive_levels, rendered
+from planner.plan_record import PlanCheck, PlanRecordError, check_plan
 
 __all__ = ["ACTIVE_LEVEL", "TIMING_KEYS", "PlanFile", "PlanFileError", "Schedule", "StepDrive",
            "build_schedule", "load_plan", "plan_from_dict"]
@@ -52,16 +53,21 @@ class PlanFile:
     positions_mm: NDArray
     frequency_hz: float
     timing: dict[str, float]
+    record: PlanCheck | None = None  # sealed / edited / unsealed (planner.plan_record)
 
     @property
     def n_sites(self) -> int:
         return len(self.crosstalk_um)
 
 
-def plan_from_dict(d: Any) -> PlanFile:
-    """Validate a plan mapping (``hapticrom plan --out``)."""
-    if not isinstance(d, dict) or d.get("format") != "hapticrom-plan":
-        raise PlanFileError("format", "not a hapticrom plan (format != 'hapticrom-plan')")
+def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
+    """Validate a plan mapping (``hapticrom plan --out``) as untrusted input: its record
+    (:func:`planner.plan_record.check_plan`: header, every number in its physical range,
+    ``schema`` when given, the digest) and what playing needs."""
+    try:
+        record = check_plan(d, schema)
+    except PlanRecordError as err:
+        raise PlanFileError(err.field, str(err)) from None
     if d.get("best") is None:
         raise PlanFileError("best", "the plan has no feasible design (best = null): nothing "
                             "to play; re-plan with wider pitch bounds or another criterion")
@@ -103,17 +109,19 @@ def plan_from_dict(d: Any) -> PlanFile:
             raise PlanFileError(f"timing.{key}", f"plan.timing.{key} = {v!r}: expected a "
                                 f"number, allowed {allowed}; re-plan to refresh the timing")
         timing[key] = float(v)
-    return PlanFile(d, C, pos, freq, timing)
+    return PlanFile(d, C, pos, freq, timing, record)
 
 
-def load_plan(path: str | Path) -> PlanFile:
+def load_plan(path: str | Path, schema: dict[str, Any] | None = None) -> PlanFile:
     try:
         data = json.loads(Path(path).read_text())
     except OSError as err:
         raise PlanFileError("<file>", f"cannot read plan {str(path)!r}: {err}") from None
     except json.JSONDecodeError as err:
         raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
-    return plan_from_dict(data)
+    except RecursionError:
+        raise PlanFileError("<file>", f"{path}: nested too deeply to be a plan") from None
+    return plan_from_dict(data, schema)
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,14 @@ sent again, at most ``retries`` times; a NAK for a refused command (channel, lev
 is raised at once. A failing port (unplugged: ``SerialException``/``OSError``) marks the
 device disconnected and raises :class:`DeviceError`; the firmware's watchdog then stops the
 array, since no heartbeat arrives any more.
+
+A refused PLAY_SCHEDULE (the schedule never started) is :class:`DeviceRefused` (bad input for
+this device: exit 2). While a schedule plays (``wait``), the host polls STATUS every
+``POLL_S``: a watchdog or on-time stop the device reports, a lost link or a refusal ends the
+wait with :class:`PlaybackInterrupted`, whose report says up to which step the pattern was
+played (:func:`hardware.playback.playback_report`); the exposure played so far is added to the
+meter at least every ``ACCRUE_S`` (written through). ``record`` (a
+:class:`hardware.playback.JsonLines`) keeps the session's events.
 """
 
 from __future__ import annotations
@@ -18,7 +26,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from hardware.device import Device, DeviceError
+from hardware.device import Device, DeviceError, DeviceRefused, PlaybackInterrupted
+from hardware.limits import DeviceLimits
+from hardware.playback import JsonLines, playback_report
 from hardware.protocol import (
     APPEND,
     MAX_SEGMENTS,
@@ -35,12 +45,26 @@ from hardware.protocol import (
     encode_levels,
     encode_schedule,
 )
-from hardware.safety import ExposureMeter, SafetyLimits
+from hardware.safety import ACCRUE_S, ExposureMeter, SafetyLimits
 from hardware.schedule import Schedule
 
 __all__ = ["SerialDevice"]
 
 TRANSIENT = (ErrorCode.BAD_CRC, ErrorCode.BAD_LENGTH, ErrorCode.BAD_VERSION)
+POLL_S = 0.05  # STATUS poll period while a schedule plays [s]
+REFUSALS = {ErrorCode.ON_TIME: "a segment longer than the device's on-time limit",
+            ErrorCode.LEVEL_RANGE: "a level beyond the device's own limit",
+            ErrorCode.BAD_CHANNEL: "a channel the device does not have",
+            ErrorCode.SCHEDULE_FULL: "more segments than the device holds",
+            ErrorCode.BAD_TYPE: "a command the device does not know"}
+
+
+class NakError(DeviceError):
+    """The device refused a command (a NAK that is not a transmission fault)."""
+
+    def __init__(self, msg: Msg, code: ErrorCode) -> None:
+        super().__init__(f"the device refused {msg.name}: {code.name}")
+        self.code = code
 
 
 class SerialDevice(Device):
@@ -50,7 +74,8 @@ class SerialDevice(Device):
 
     def __init__(self, port: Any, n_channels: int, limits: SafetyLimits | None = None,
                  exposure: ExposureMeter | None = None, *, baudrate: int = 115200,
-                 timeout_s: float = 0.1, retries: int = 3, wait: bool = True) -> None:
+                 timeout_s: float = 0.1, retries: int = 3, wait: bool = True,
+                 record: JsonLines | None = None) -> None:
         super().__init__(n_channels, limits, exposure)
         import serial  # the `hardware` extra (pyserial)
 
@@ -70,7 +95,9 @@ class SerialDevice(Device):
         self.disconnected = False
         self.retransmissions = 0  # frames sent again
         self.transient_naks = 0  # of which after a NAK (the rest after a timeout)
+        self.record = record
         status = self._status()
+        self.first_status = status
         if len(status.levels) < n_channels:
             raise DeviceError(f"the device has {len(status.levels)} channels: the plan needs "
                               f"{n_channels}")
@@ -104,7 +131,7 @@ class SerialDevice(Device):
                     if code in TRANSIENT:
                         self.transient_naks += 1
                         continue
-                    raise DeviceError(f"the device refused {msg.name}: {code.name}")
+                    raise NakError(msg, code)
                 return reply
         raise DeviceError(f"no acknowledgement of {msg.name} after {self.retries + 1} "
                           f"attempts of {self.timeout_s:g} s")
@@ -125,13 +152,53 @@ class SerialDevice(Device):
     def _set_levels(self, levels: NDArray) -> None:
         self._transact(Msg.SET_LEVELS, encode_levels(dict(enumerate(map(float, levels)))))
 
+    def reported_limits(self) -> DeviceLimits:
+        st = self.first_status
+        return DeviceLimits(st.max_level, None if st.max_on_ms is None else st.max_on_ms / 1e3,
+                            st.watchdog_ms / 1e3 if st.watchdog_ms else None)
+
+    def note(self, event: str, **info: Any) -> None:
+        if self.record is not None:
+            self.record.write(event, **info)
+
     def _play(self, schedule: Schedule, segments: list[Segment]) -> None:
         chunks = [segments[i:i + MAX_SEGMENTS] for i in range(0, len(segments), MAX_SEGMENTS)]
         for i, chunk in enumerate(chunks or [[]]):
             flags = (APPEND if i else 0) | (START_NOW if i == len(chunks) - 1 else 0)
-            self._transact(Msg.PLAY_SCHEDULE, encode_schedule(chunk, flags))
+            try:
+                self._transact(Msg.PLAY_SCHEDULE, encode_schedule(chunk, flags))
+            except NakError as err:  # START_NOW rides on the last chunk: nothing started
+                raise DeviceRefused(f"the device refused the schedule ({err.code.name}: "
+                                    f"{REFUSALS.get(err.code, 'refused')}); nothing was "
+                                    "played", err.code.name) from None
         if self.wait:  # keep the host alive (and its heartbeat going) while it plays
-            time.sleep(schedule.total_ms / 1e3)
+            self._watch(schedule, time.monotonic())
+
+    def _watch(self, schedule: Schedule, t0: float) -> None:
+        """Poll STATUS until the schedule's end; raise PlaybackInterrupted on a stop."""
+        total = schedule.total_ms
+        ok_ms, accrued_at = 0.0, t0
+        while True:
+            asked = (time.monotonic() - t0) * 1e3
+            try:
+                st = self._status()
+            except NakError as err:
+                raise PlaybackInterrupted(playback_report(schedule, ok_ms, "nak",
+                                                          str(err))) from None
+            except DeviceError as err:
+                raise PlaybackInterrupted(playback_report(schedule, ok_ms, "link",
+                                                          str(err))) from None
+            if st.watchdog_tripped or st.on_time_tripped:
+                self.accrue(schedule, min(asked, total))  # possibly on until now: counted
+                reason = "watchdog" if st.watchdog_tripped else "on-time"
+                raise PlaybackInterrupted(playback_report(schedule, ok_ms, reason))
+            ok_ms = min(asked, total)
+            if time.monotonic() - accrued_at >= ACCRUE_S:
+                self.accrue(schedule, ok_ms)
+                accrued_at = time.monotonic()
+            if asked >= total:
+                return
+            time.sleep(min(POLL_S, max(0.0, (total - asked) / 1e3)))
 
     def _stop_all(self) -> None:
         self._transact(Msg.STOP_ALL)

@@ -9,6 +9,7 @@ import numpy as np
 
 import figstyle
 from planner.optimise import PITCH_TOL_MM, Z95, Plan
+from planner.plan_record import KIND, SCHEMA_VERSION
 
 __all__ = ["plan_to_dict", "write_plan_plot"]
 
@@ -18,7 +19,8 @@ def _r(x: float | None, digits: int = 4) -> float | None:
 
 
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
-    """Everything a user or the play step needs: request, candidates, the chosen array."""
+    """Everything a user or the play step needs: request, candidates, the chosen array (not
+    yet sealed: ``planner.plan_record.seal_plan`` adds the digest when it is written)."""
     req = plan.request
     cands = [{"name": c.name, "frequency_hz": c.frequency_hz, "inputs": c.inputs,
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
@@ -43,7 +45,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "at_best_frequency_um": None if best is None else
             _r(float(t(best.frequency_hz)), 6)}
     return {
-        "format": "hapticrom-plan", "version": 1, "model": req.model,
+        "schema_version": SCHEMA_VERSION, "kind": KIND, "model": req.model,
         "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid,
                   "objective": req.objective, "region_mm": req.region_mm},
         "criterion": criterion,

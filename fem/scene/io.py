@@ -116,6 +116,8 @@ def scene_to_dict(scene: Scene) -> dict[str, dict[str, Any]]:
                 out[name] = _unit_to_dict(obj, scene.load.kind)
             continue
         table = _table_to_dict(obj, specs)
+        if name == "analysis" and obj.kind == "sweep":  # the band, as read
+            table["frequency_hz"] = [float(f) for f in obj.frequencies_hz]
         if name in ("effects", "mesh"):  # auto effects, absent cell counts: TOML has no null
             table = {key: value for key, value in table.items() if value is not None}
             if not table:

@@ -157,7 +157,11 @@ class Effects:
 class Analysis:
     """Analysis kind; ``frequency_hz`` drives harmonic analyses (and normal actuators in a
     transient). Transient: step and duration [ms], generalised-alpha spectral radius
-    ``rho_inf`` [-], and the ERM drive as (t_ms, volts) steps, each held until the next."""
+    ``rho_inf`` [-], and the ERM drive as (t_ms, volts) steps, each held until the next.
+
+    A sweep (``kind = "sweep"``) answers at every frequency of ``frequencies_hz`` (Hz,
+    strictly increasing); given ``frequency_hz`` as a list or tuple, that is the band, and
+    ``frequency_hz`` becomes its highest frequency, the one the mesh is sized for."""
 
     kind: str = "static"
     frequency_hz: float = 120.0
@@ -165,8 +169,15 @@ class Analysis:
     duration_ms: float = 200.0
     rho_inf: float = 0.9
     voltage_schedule: tuple[tuple[float, float], ...] = ((0.0, 3.3),)
+    frequencies_hz: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
+        band = self.frequency_hz
+        if isinstance(band, list | tuple):  # a sweep's band given as its frequencies
+            object.__setattr__(self, "frequencies_hz", tuple(band))
+            object.__setattr__(self, "frequency_hz", max(band) if band else band)
+        elif isinstance(self.frequencies_hz, list):
+            object.__setattr__(self, "frequencies_hz", tuple(self.frequencies_hz))
         steps = self.voltage_schedule  # lists become tuples (hashable); validation does the rest
         if isinstance(steps, list | tuple):
             object.__setattr__(self, "voltage_schedule", tuple(

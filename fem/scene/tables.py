@@ -12,6 +12,7 @@ from typing import Any
 from fieldspec import REQUIRED, Spec
 
 from ..materials import get_material
+from .frequencies import Frequencies, read_frequencies
 from .model import (
     EFFECT_NAMES,
     Analysis,
@@ -131,8 +132,8 @@ _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
     }),
     "unit": (Unit, UNIT),
     "analysis": (Analysis, {
-        "kind": Spec(str, MODEL, choices=("static", "harmonic", "transient")),
-        "frequency_hz": Spec(float, MODEL, "(0, 1e5]"),
+        "kind": Spec(str, MODEL, choices=("static", "harmonic", "transient", "sweep")),
+        "frequency_hz": Spec(Frequencies, MODEL, "(0, 1e5]", reader=read_frequencies),
         "time_step_ms": Spec(float, MODEL, "(0, 100]"),
         "duration_ms": Spec(float, MODEL, "[analysis.time_step_ms, 1e5]"),
         "rho_inf": Spec(float, MODEL, "[0, 1]"),

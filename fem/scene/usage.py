@@ -31,7 +31,7 @@ def unused_fields(scene: Scene) -> list[str]:
     used = _LOAD_FIELDS.get(kind, ())
     unused += [f"load.{k}" for keys in _LOAD_FIELDS.values() for k in keys if k not in used]
     a = scene.analysis.kind
-    if a != "harmonic" and not (a == "transient" and kind != LoadKind.UNIT):
+    if a not in ("harmonic", "sweep") and not (a == "transient" and kind != LoadKind.UNIT):
         unused.append("analysis.frequency_hz")  # a transient ERM runs at its motor's speed
     if a != "transient":
         unused += [f"analysis.{k}" for k in _TRANSIENT_FIELDS] + ["output.history_every"]

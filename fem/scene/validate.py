@@ -204,6 +204,7 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
         if table or name != "effects":
             out[name] = table
     _check_counts(out)
+    _check_band(out["analysis"])
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
                          "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
@@ -216,6 +217,19 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
 #: Most profile points and time steps a scene may ask for (each is a row of the results).
 MAX_PROFILE_POINTS = 100_000
 MAX_TIME_STEPS = 1_000_000
+
+
+def _check_band(a: Mapping[str, Any]) -> None:
+    """A sweep needs a band of frequencies, every other analysis one frequency."""
+    band = isinstance(a["frequency_hz"], tuple)
+    if a["kind"] == "sweep" and not band:
+        raise SceneError("analysis.frequency_hz", f"analysis.frequency_hz = "
+                         f"{a['frequency_hz']!r}: a sweep needs a band, e.g. frequency_hz = "
+                         "{ start = 100, stop = 250, step = 1 } or a list of frequencies in Hz")
+    if a["kind"] != "sweep" and band:
+        raise SceneError("analysis.frequency_hz", "analysis.frequency_hz is a band of "
+                         f"{len(a['frequency_hz'])} frequencies, allowed only with "
+                         f"analysis.kind = 'sweep' (kind is {a['kind']!r}); give one number")
 
 
 def _check_counts(out: Mapping[str, Mapping[str, Any]]) -> None:

@@ -14,4 +14,4 @@ Pattern (every module follows it, so adding a command is adding a module and a n
 
 #: Module names of the subcommands, in the order ``hapticrom --help`` lists them.
 COMMANDS: tuple[str, ...] = ("simulate", "reproduce", "generate", "dataset", "ingest", "train",
-                             "refine", "predict", "models", "plan", "play", "bench")
+                             "refine", "predict", "models", "plan", "play", "emulate", "bench")

@@ -24,6 +24,7 @@ __all__ = ["register"]
 
 def _run(args: argparse.Namespace) -> int:
     from planner import load_layout, plan_layout, plan_to_dict, write_plan_plot
+    from planner.plan_record import seal_plan
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
@@ -76,7 +77,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.verify:
             doc["verify"] = verify
         with atomic_path(args.out) as tmp:
-            tmp.write_text(json.dumps(doc, indent=1) + "\n")
+            tmp.write_text(json.dumps(seal_plan(doc), indent=1) + "\n")
         print(f"wrote {args.out}")
     if args.plot:
         with atomic_path(args.plot) as tmp:

@@ -45,6 +45,7 @@ def test_help_is_0_and_a_missing_command_is_2(capsys):
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "log",
      "--out", "{tmp}/play"],
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "nonsense"],
+    ["emulate", "--channels", "0"],
     ["bench", "accuracy", "--quick", "--out", "{tmp}/no/such/dir/report.txt"],
 ])
 def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
@@ -56,7 +57,7 @@ def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
 
 def test_every_command_has_a_bad_input_case_above():
     covered = {"simulate", "reproduce", "generate", "dataset", "ingest", "train", "refine",
-               "predict", "models", "plan", "play", "bench"}
+               "predict", "models", "plan", "play", "emulate", "bench"}
     assert covered == set(COMMANDS)
 
 

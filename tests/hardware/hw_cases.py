@@ -1,6 +1,8 @@
 """Plan fixtures for the hardware tests: a hand-made plan (three sites in a row, a crosstalk
 matrix written out) and a real one from the shipped surrogate (a 2 x 2 forearm array). Both
-carry a ``timing`` object with the keys ``planner.timing`` writes."""
+carry a ``timing`` object with the keys ``planner.timing`` writes. Both drive at 100 Hz, where
+the shipped ERM's level limit (4.5 V maximum / 2.82 V nominal = 1.598) allows the 1.5 kick;
+``sealed`` adds the plan record (``planner.plan_record``) as ``hapticrom plan`` writes it."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ def line_plan() -> dict[str, Any]:
     C = [[10.0, 1.0, 0.1], [1.0, 10.0, 1.0], [0.1, 1.0, 10.0]]
     return {"format": "hapticrom-plan", "version": 1, "model": "models/nn-default",
             "array": {"rows": 1, "cols": 3, "grid": "square"}, "site": {}, "candidates": [],
-            "best": "hand-made", "best_frequency_hz": 125.0, "pitch_mm": 20.0,
+            "best": "hand-made", "best_frequency_hz": 100.0, "pitch_mm": 20.0,
             "positions_mm": [[0.0, 0.0], [20.0, 0.0], [40.0, 0.0]], "crosstalk_um": C,
             "timing": dict(TIMING)}
 
@@ -34,6 +36,13 @@ def real_plan() -> dict[str, Any]:
         with open("examples/forearm-layout.toml", "rb") as f:
             d = tomllib.load(f)
         d["array"].update(rows=2, cols=2)
-        d["drive"]["frequencies_hz"] = [180.0]
+        d["drive"]["frequencies_hz"] = [100.0]
         _REAL.update(plan_to_dict(plan_layout(layout_from_dict(d))), timing=dict(TIMING))
     return copy.deepcopy(_REAL)
+
+
+def sealed(d: dict[str, Any]) -> dict[str, Any]:
+    """``d`` as ``hapticrom plan`` writes it: schema version, kind and digest."""
+    from planner.plan_record import seal_plan
+
+    return seal_plan(d)

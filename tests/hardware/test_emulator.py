@@ -76,7 +76,7 @@ def test_on_time_limit_stops_one_channel():
 
 
 def test_schedule_plays_in_time_and_appends():
-    a = EmulatedArray(2, watchdog_s=10.0, max_on_s=10.0)
+    a = EmulatedArray(2, watchdog_s=10.0, max_on_s=10.0, max_level=2.0)
     first = [Segment(0, 10, 0, 1.5), Segment(10, 90, 0, 1.0)]
     reply(a, Msg.PLAY_SCHEDULE, 1, encode_schedule(first, 0), 0.0)
     reply(a, Msg.PLAY_SCHEDULE, 2, encode_schedule([Segment(100, 8, 0, -1.5)],

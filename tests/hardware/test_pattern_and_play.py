@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from hw_cases import TIMING, line_plan, real_plan
+from hw_cases import TIMING, line_plan, real_plan, sealed
 
 from hapticrom.cli import main
 from hardware import (
@@ -96,8 +96,8 @@ def test_a_channel_driven_twice_needs_the_inter_stimulus_interval():
     (lambda d: d["timing"].update(overdrive_level=0.5), "timing.overdrive_level"),
     (lambda d: d["timing"].update(rise_ms="fast"), "timing.rise_ms"),
     (lambda d: d.update(best=None), "best"),
-    (lambda d: d.update(format="x"), "format"),
-    (lambda d: d.update(crosstalk_um=[[1.0, 2.0]]), "crosstalk_um"),
+    (lambda d: d.update(format="x"), "kind"),
+    (lambda d: d.update(crosstalk_um=[[1.0, 2.0]]), "crosstalk_um[0]"),
     (lambda d: d.update(positions_mm=[[0.0, 0.0]]), "positions_mm"),
 ])
 def test_bad_plans_name_the_key(change, field):
@@ -153,7 +153,7 @@ def test_log_device_writes_every_command(tmp_path):
 
 def write_plan(tmp_path, d):
     path = tmp_path / "plan.json"
-    path.write_text(json.dumps(d))
+    path.write_text(json.dumps(sealed(d)))
     return path
 
 
@@ -182,7 +182,7 @@ def test_cli_log_writes_jsonl(tmp_path):
     assert main(["play", str(plan), str(pattern), "--device", "log", "--out", str(out)]) == 0
     commands = [json.loads(x)["command"] for x in (out / "commands.jsonl").read_text()
                 .splitlines()]
-    assert commands == ["open", "play", "stop_all", "close"]
+    assert commands == ["open", "plan", "limits", "play", "stop_all", "close"]
 
 
 @pytest.mark.parametrize("text, field", [
@@ -221,7 +221,11 @@ def test_cli_refuses_a_pattern_beyond_the_on_time_limit(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["play", str(plan), str(pattern), "--device", "log", "--out", str(out),
                  "--max-on-ms", "1000"]) == 2
-    assert "channel 0 would run 2.008 s" in capsys.readouterr().err and not out.exists()
+    assert "step[0]: channel 0 would run 2.008 s" in capsys.readouterr().err
+    lines = [json.loads(x) for x in (out / "commands.jsonl").read_text().splitlines()]
+    assert [x["command"] for x in lines] == ["open", "plan", "limits", "refused", "stop_all",
+                                             "close"]  # the refusal recorded, nothing played
+    assert lines[3]["field"] == "step[0]" and lines[3]["limit"] == 1.0
 
 
 def test_cli_bad_device_exits_2(tmp_path, capsys):

@@ -79,9 +79,11 @@ def test_schedule_on_time_merges_touching_segments():
     with pytest.raises(SafetyError, match=r"channel 0 would run 1\.001 s") as err:
         check_schedule([*ok, Segment(1000, 1, 0, -1.0)], lim)
     assert err.value.field == "max_on_s"
-    # a pause resets it; levels are clamped
-    out = check_schedule([Segment(0, 900, 1, 5.0), Segment(901, 900, 1, 1.0)], lim)
-    assert out[0].level == 2.0
+    # a pause resets it; a level beyond the limit is refused, not clipped (issue 26)
+    assert len(check_schedule([Segment(0, 900, 1, 2.0), Segment(901, 900, 1, 1.0)], lim)) == 2
+    with pytest.raises(SafetyError, match=r"channel 1 would be driven at level -5") as err:
+        check_schedule([Segment(0, 900, 1, 1.0), Segment(901, 900, 1, -5.0)], lim)
+    assert (err.value.field, err.value.value, err.value.limit) == ("max_level", 5.0, 2.0)
 
 
 def test_schedule_duty_cycle_over_the_window():

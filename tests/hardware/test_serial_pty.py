@@ -12,10 +12,11 @@ import time
 import numpy as np
 import pytest
 import serial
-from hw_cases import line_plan
+from hw_cases import line_plan, sealed
 
 from hardware import (
     DeviceError,
+    DeviceRefused,
     Heartbeat,
     SafetyLimits,
     build_schedule,
@@ -188,11 +189,18 @@ def test_a_lost_link_is_a_device_error_and_the_watchdog_stops_the_array(emu):
     assert wait_until(lambda: len(channel_stops(emu, "watchdog")) == N)
 
 
-def test_a_schedule_plays_on_the_emulator_with_overdrive_and_brake(emu):
+def test_a_schedule_plays_on_the_emulator_with_overdrive_and_brake():
     plan = plan_from_dict(line_plan())
     pattern = pattern_from_dict({"step": [{"sites": [1], "duration_ms": 60, "gap_ms": 50}]})
     sched = build_schedule(pattern, plan)
-    with SerialDevice(emu.port, N, SafetyLimits(max_level=1.5)) as dev, Heartbeat(dev):
+    # the emulator's default is the ERM's rated 4.5 / 3.3 V: it refuses the 1.5 kick itself
+    with PtyEmulator(N, watchdog_s=WATCHDOG_S) as emu, \
+            SerialDevice(emu.port, N, SafetyLimits(max_level=1.5)) as dev, Heartbeat(dev):
+        with pytest.raises(DeviceRefused, match="LEVEL_RANGE") as err:
+            dev.play(sched)
+        assert err.value.field == "device" and emu.array.events == []
+    with PtyEmulator(N, watchdog_s=WATCHDOG_S, max_level=1.6) as emu, \
+            SerialDevice(emu.port, N, SafetyLimits(max_level=1.5)) as dev, Heartbeat(dev):
         dev.play(sched)
         assert wait_until(lambda: emu.array.t0 is None)
     levels = [round(e.level, 3) for e in emu.array.events if e.channel == 1]
@@ -206,19 +214,19 @@ def test_cli_plays_on_a_serial_port_and_records_the_exposure(tmp_path, capsys):
     from hapticrom.cli import main
 
     plan = tmp_path / "plan.json"
-    plan.write_text(json.dumps(line_plan()))
+    plan.write_text(json.dumps(sealed(line_plan())))
     pattern = tmp_path / "p.toml"
     pattern.write_text("[[step]]\nsites = [0, 2]\nduration_ms = 80.0\ngap_ms = 20.0\n"
                        "[[step]]\nsites = [1]\nduration_ms = 80.0\n")
-    exposure = tmp_path / "exposure.json"
-    with PtyEmulator(3, watchdog_s=WATCHDOG_S) as emu:
+    exposure = tmp_path / "exposure.jsonl"
+    with PtyEmulator(3, watchdog_s=WATCHDOG_S, max_level=1.6) as emu:
         assert main(["play", str(plan), str(pattern), "--device", f"serial:{emu.port}",
                      "--exposure-file", str(exposure)]) == 0
         reasons = {(e.channel, e.reason) for e in emu.array.events}
     assert {(0, "schedule"), (1, "schedule"), (2, "schedule")} <= reasons
     assert "watchdog" not in {r for _, r in reasons}
     assert emu.array.levels == [0.0] * 3
-    dose = json.loads(exposure.read_text())["dose"]
+    dose = np.sum([json.loads(x)["dose"] for x in exposure.read_text().splitlines()], axis=0)
     assert len(dose) == 3 and min(dose) > 0
     assert "played on serial:" in capsys.readouterr().out
 
@@ -229,7 +237,7 @@ def test_cli_a_missing_serial_port_exits_2(tmp_path, capsys):
     from hapticrom.cli import main
 
     plan = tmp_path / "plan.json"
-    plan.write_text(json.dumps(line_plan()))
+    plan.write_text(json.dumps(sealed(line_plan())))
     pattern = tmp_path / "p.toml"
     pattern.write_text("[[step]]\nsites = [0]\nduration_ms = 10.0\n")
     port = tmp_path / "ttyNONE"

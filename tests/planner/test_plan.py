@@ -80,7 +80,7 @@ def test_cli_writes_plan_and_figure_or_exits_2_writing_nothing(tmp_path, capsys)
                                                   repr(str(ROOT / "models" / "nn-default"))))
     assert main(["plan", str(layout), "--out", str(out), "--plot", str(png)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["format"] == "hapticrom-plan" and doc["best"] is not None
+    assert doc["kind"] == "hapticrom.plan" and doc["best"] is not None
     assert np.max(doc["leakage_ratio"]) <= 0.1 and png.stat().st_size > 10_000
     layout.write_text("[array]\nrows = 4\ncols = 99\n")
     out2 = tmp_path / "plan2.json"
