@@ -223,15 +223,13 @@ def test_validate_checks_the_sweep_columns(tmp_path, column, change, words):
 
 
 def test_a_non_finite_sweep_is_a_failed_row(monkeypatch):
-    import fem
+    import fem.sweep
     from surrogate.data.worker import run_sample
 
     bad = fake_sweep(1)
     bad.center[3, 1] = np.nan
-    monkeypatch.setattr(fem, "simulate", lambda scene: bad)
-    scene = _space().resolve(_space().center())
-    monkeypatch.setattr("fem.scene.scene_from_dict", lambda d: d)
-    out = run_sample(scene)
+    monkeypatch.setattr(fem.sweep, "sweep", lambda scene: bad)
+    out = run_sample(_space().resolve(_space().center()))
     assert out["status"] == "failed" and "sweep_center_uz_re_um contains NaN" in out["error"]
 
 
