@@ -221,7 +221,6 @@ def _generate(space, n: int, workers: int) -> dict:
 
 def sweeps(single, sweep, n: int, n_sweep: int, workers: list[int]) -> None:
     """Single-frequency and sweep generation side by side, in answers per minute."""
-    import numpy as np
 
     n_f = len(sweep.band.frequencies_hz)
     print(f"# sweep space {sweep.name!r}: {n_f} frequencies "
@@ -237,7 +236,7 @@ def sweeps(single, sweep, n: int, n_sweep: int, workers: list[int]) -> None:
             per = n_f if kind == "sweep" else 1
             solves = (f"{ok['sweep_full_solves'].mean():>11.2f}" if kind == "sweep"
                       else f"{'1':>11}")
-            est = (f"{np.max(ok['sweep_error_estimate'], initial=0):>9.1e}" if kind == "sweep"
+            est = (f"{ok['sweep_error_estimate'].max():>9.1e}" if kind == "sweep"
                    else f"{'-':>9}")
             print(f"{w:>7} {kind:>7} {count:>5} {run['wall']:>8.2f} {run['rate']:>9.1f} "
                   f"{run['rate'] * per:>12.0f} {df['wall_s'].mean():>12.3f} {solves} {est} "
