@@ -250,3 +250,12 @@ def test_ingest_refuses_a_sweep_dataset_and_writes_nothing(tmp_path):
     with pytest.raises(DatasetError, match="is a sweep dataset"):
         ingest_table(table, path)
     assert {p.name: p.read_bytes() for p in path.iterdir()} == before
+
+
+def test_training_on_a_sweep_dataset_is_refused_by_name(tmp_path):
+    from hapticrom.cli import main
+
+    path = _dataset(tmp_path / "d")
+    assert main(["train", "--data", str(path), "--kind", "gp", "--out",
+                 str(tmp_path / "m")]) == 2
+    assert not (tmp_path / "m").exists()
