@@ -198,8 +198,9 @@ class Store:
             raise DatasetError(str(self.path), f"{self.path}: refused: "
                                f"{'; '.join(check.problems)}")
         if check.strays:
-            warnings.warn(f"{self.path}: ignoring files that are not part of the dataset: "
-                          f"{', '.join(check.strays)}", DatasetWarning, stacklevel=3)
+            warnings.warn_explicit(f"{self.path}: ignoring files that are not part of the "
+                                   f"dataset: {', '.join(check.strays)}", DatasetWarning,
+                                   filename="hapticrom", lineno=0)  # no source line shown
         return check.strays
 
     @classmethod
