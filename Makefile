@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PIP := $(BIN)/pip install --quiet -c constraints.txt
 
-.PHONY: demo test test-slow lint bench bench-accuracy clean venv
+.PHONY: demo test test-slow lint bench bench-accuracy clean venv js
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
@@ -13,6 +13,16 @@ $(STAMP): pyproject.toml constraints.txt
 	touch $(STAMP)
 
 venv: $(STAMP)
+
+# What tests/embed needs: the npm packages of embed/ and Debian's chromium (installed if missing).
+JS_STAMP := embed/node_modules/.package-lock.json
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+$(JS_STAMP): embed/package.json embed/package-lock.json
+	cd embed && npm ci --no-audit --no-fund
+
+js: $(JS_STAMP)
+	command -v chromium >/dev/null 2>&1 || ($(SUDO) apt-get update && $(SUDO) apt-get install -y chromium)
 
 UNITS := unit-bare-forward unit-double-forward unit-triple-reverse-pogo
 
@@ -28,10 +38,10 @@ demo: $(STAMP)
 	$(BIN)/hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
 	$(BIN)/hapticrom play out/plan.json examples/pattern-sweep.toml --device sim --out out/play
 
-test: $(STAMP)
+test: $(STAMP) js
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest -q
+	HAPTICROM_REQUIRE_JS=1 $(BIN)/python -m pytest -q
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -m slow

@@ -27,6 +27,7 @@ _LAZY = {
     "get_material": "fem.materials",
     "SimulationResult": "fem.simulation",
     "simulate": "fem.simulation",
+    "SweepResult": "fem.sweep",
 }
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "Scene",
     "SceneError",
     "SimulationResult",
+    "SweepResult",
     "dump_scene_toml",
     "get_material",
     "load_scene",
@@ -58,6 +60,7 @@ if TYPE_CHECKING:
         scene_to_dict,
     )
     from fem.simulation import SimulationResult, simulate
+    from fem.sweep import SweepResult
 
 
 def __getattr__(name: str) -> Any:

@@ -245,3 +245,22 @@ def _load(scene: Scene, domain: Domain, mode: int,
     t = ld.amplitude_Pa
     return loads.surface_traction(domain, mode, ld.radius_m, (0.0, t, 0.0) if mode == 0
                                   else (t, 0.0, -t))
+
+
+def resolution_warning(scene: Scene, problem: Problem) -> str | None:
+    """A message when the largest elements hold fewer than ``ELEMENTS_PER_WAVELENGTH / order``
+    elements per shortest shear wavelength (10 linear or 5 quadratic keep the phase error near
+    1 %). Only possible with ``mesh.follow_wavelength = false``: otherwise the mesh obeys the
+    rule by construction."""
+    lam, part = shortest_shear_wavelength(scene)
+    h = mesh_spec(scene).far_size
+    if not np.isfinite(lam) or h <= wave_element_size(scene) * (1 + 1e-9):
+        return None
+    f = drive_omega(scene) / (2 * np.pi)
+    per_wave = lam / h
+    advice = f"use far_size_mm <= {np.floor(wave_element_size(scene) * 1e6) / 1e3:g}"
+    if scene.mesh.order == 1:
+        advice += " or mesh.order = 2"
+    return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
+            f"in '{part}' at {f:g} Hz with far_size_mm = {h * 1e3:g} and order "
+            f"{scene.mesh.order}; {advice}, or mesh.follow_wavelength = true (about 1 % error)")

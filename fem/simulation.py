@@ -20,15 +20,13 @@ from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .domain import Domain
 from .haptic_unit import pin_contact_check
 from .problem import (
-    Problem,
     build_problem,
     drive_omega,
-    mesh_spec,
-    shortest_shear_wavelength,
-    wave_element_size,
+    resolution_warning,
 )
 from .scene import Scene
 from .solve import OperatorLog, solve_mode
+from .sweep import SweepResult, sweep
 
 
 @dataclass(frozen=True)
@@ -168,8 +166,10 @@ class SimulationResult:
 
 
 def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
-             progress: Callable[[int, int], None] | None = None) -> SimulationResult:
-    """Solve a scene and sample the skin surface.
+             progress: Callable[[int, int], None] | None = None
+             ) -> SimulationResult | SweepResult:
+    """Solve a scene and sample the skin surface (a sweep scene: at every frequency of its
+    band, :func:`fem.sweep.sweep`).
 
     ``progress(done, total)`` is called with time steps done and the total during a transient
     (a few hundred times per run; never for a steady solve).
@@ -177,6 +177,8 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     The size is estimated first (:func:`fem.cost.check_cost`): a scene above ``max_unknowns``
     is refused with a :class:`fem.scene.SceneError` naming the fields that drive its size,
     before anything is allocated. Pass a larger ``max_unknowns`` (``math.inf``) to run it."""
+    if scene.analysis.kind == "sweep":
+        return sweep(scene, max_unknowns=max_unknowns)
     t0 = time.perf_counter()
     check_cost(scene, max_unknowns)
     problem = build_problem(scene)
@@ -217,22 +219,3 @@ def simulate(scene: Scene, *, max_unknowns: float = DEFAULT_MAX_UNKNOWNS,
     return SimulationResult(scene, r_probe * 1e3, vals[:n], edge_mm, vals[n], vals[n + 1],
                             prof_mm, vals[n + 2:], meta, problem.domain, nodal, histories, extras,
                             centre_z_mm)
-
-
-def resolution_warning(scene: Scene, problem: Problem) -> str | None:
-    """A message when the largest elements hold fewer than ``ELEMENTS_PER_WAVELENGTH / order``
-    elements per shortest shear wavelength (10 linear or 5 quadratic keep the phase error near
-    1 %). Only possible with ``mesh.follow_wavelength = false``: otherwise the mesh obeys the
-    rule by construction."""
-    lam, part = shortest_shear_wavelength(scene)
-    h = mesh_spec(scene).far_size
-    if not np.isfinite(lam) or h <= wave_element_size(scene) * (1 + 1e-9):
-        return None
-    f = drive_omega(scene) / (2 * np.pi)
-    per_wave = lam / h
-    advice = f"use far_size_mm <= {np.floor(wave_element_size(scene) * 1e6) / 1e3:g}"
-    if scene.mesh.order == 1:
-        advice += " or mesh.order = 2"
-    return (f"under-resolved: {per_wave:.2f} elements per shear wavelength ({lam * 1e3:.2f} mm) "
-            f"in '{part}' at {f:g} Hz with far_size_mm = {h * 1e3:g} and order "
-            f"{scene.mesh.order}; {advice}, or mesh.follow_wavelength = true (about 1 % error)")

@@ -18,9 +18,8 @@ from numpy.typing import NDArray
 
 from . import SOLVER_VERSION, linalg, probes, results
 from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
-from .problem import Problem, build_problem
+from .problem import Problem, build_problem, resolution_warning
 from .scene import LoadKind, Scene
-from .simulation import resolution_warning
 from .solve import OperatorLog, solve_mode
 from .sweep_operator import CHEBYSHEV_NODES, SweepOperator
 from .sweep_rom import KRYLOV_DEPTH, MAX_EXPANSIONS, SWEEP_TOLERANCE, greedy_model
@@ -208,3 +207,32 @@ def _result(s: SweepSetup, values: NDArray, estimate: float, tolerance: float, s
                        None if edge is None else edge * 1e3, values[:, n], values[:, n + 1],
                        s.points.profile_mm, values[:, n + 2:], estimate, tolerance, solves,
                        meta, centre_z_mm)
+
+
+#: Phase errors are judged where a component's magnitude exceeds this share of the largest
+#: magnitude of its quantity (centre, edge or profile) at that frequency.
+PHASE_FLOOR = 0.01
+
+
+def sweep_errors(result: SweepResult, reference: SweepResult) -> dict[str, float]:
+    """Largest errors of ``result`` against ``reference`` at the reference's frequencies (a
+    subset of the result's): for centre, edge and profile, the relative error of the magnitude
+    (the profile's relative to its largest magnitude at that frequency) and the phase error
+    (rad) of every component whose magnitude exceeds :data:`PHASE_FLOOR` of its quantity's
+    largest."""
+    at = np.searchsorted(result.frequency_hz, reference.frequency_hz)
+    if not np.allclose(result.frequency_hz[at], reference.frequency_hz, rtol=0, atol=1e-9):
+        raise ValueError("the reference frequencies are not on the result's grid")
+    out: dict[str, float] = {}
+    for name in ("center", "edge", "profile"):
+        got, ref = getattr(result, name)[at], getattr(reference, name)
+        if ref.size == 0:
+            continue
+        got, ref = got.reshape(got.shape[0], -1, 3), ref.reshape(ref.shape[0], -1, 3)
+        mag_got, mag_ref = results.magnitude(got), results.magnitude(ref)  # (n_f, n_p)
+        scale = mag_ref.max(axis=1, keepdims=True) if name == "profile" else mag_ref
+        out[f"{name}_magnitude"] = float(np.max(np.abs(mag_got - mag_ref) / scale))
+        big = np.abs(ref) > PHASE_FLOOR * np.abs(ref).max(axis=(1, 2), keepdims=True)
+        phase = np.abs(np.angle(got[big] / ref[big]))
+        out[f"{name}_phase_rad"] = float(phase.max()) if phase.size else 0.0
+    return out

@@ -146,8 +146,10 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
                 values[name], owners[name] = v, "device (its STATUS)"
     for name, v, where in user or []:
         if v > values[name] * (1 + 1e-9):
+            shown = (f"{values[name] * 1e3:.4g} ms" if name.endswith("_s")
+                     else f"{values[name]:.4g}")  # in the unit of the user's option
             raise SafetyError(where.split(" ")[0], f"{where}: a user setting can only lower a "
-                              f"limit; {name} is {values[name]:.4g} "
+                              f"limit; the limit is {shown} "
                               f"({owners[name].split('; ')[0]})", value=v, limit=values[name],
                               owner=owners[name])
         values[name], owners[name] = v, f"user: {where}"

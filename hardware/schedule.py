@@ -17,9 +17,10 @@ the step.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -121,7 +122,10 @@ def load_plan(path: str | Path, schema: dict[str, Any] | None = None) -> PlanFil
         raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
     except RecursionError:
         raise PlanFileError("<file>", f"{path}: nested too deeply to be a plan") from None
-    return plan_from_dict(data, schema)
+    from planner.paths import resolve_plan_models  # model paths are relative to the plan
+
+    plan = plan_from_dict(data, schema)  # checked as written; then its model paths made usable
+    return replace(plan, data=resolve_plan_models(copy.deepcopy(plan.data), path))
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,11 @@ conservative choices, both stated in the plan:
   so leakage never falls with a shorter pitch (guided waves can make a profile ripple; a
   pitch in a trough would not survive a small change of the skin).
 * Beyond the profile's last point the amplitude decays at the log-slope of its last quarter
-  (and never grows).
+  (and never grows). That is an extrapolation: :func:`beyond_profile_share` says how much of
+  a site's leakage rests on it, and the plan flags it.
+* A bound field (the surrogate's 95 % bounds) carries the nominal field as its ``floor``: its
+  amplitude is never below the nominal one at any distance, also beyond the profile where the
+  two tails' slopes differ, so a pitch at the bounds is never shorter than the nominal one.
 
 Superposition: ERMs run independently (no common phase), so their contributions at a site add
 in power: leakage = sqrt(sum of squares) ("incoherent"); "worst" takes the largest single
@@ -23,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["UnitField", "crosstalk_matrix", "leakage_ratio", "site_positions"]
+__all__ = ["UnitField", "beyond_profile_share", "crosstalk_matrix", "leakage_ratio",
+           "site_positions"]
 
 
 @dataclass(frozen=True)
@@ -34,6 +39,7 @@ class UnitField:
     edge_radius_mm: float
     distance_mm: NDArray  # profile grid, distance from the edge [mm], increasing from 0
     profile_um: NDArray  # amplitude on that grid [um]
+    floor: UnitField | None = None  # never below this field's amplitude (a bound's nominal)
 
     def __post_init__(self) -> None:
         if np.any(self.profile_um <= 0) or self.center_um <= 0:
@@ -55,7 +61,13 @@ class UnitField:
         grid = self.distance_mm
         inside = np.interp(np.clip(d, grid[0], grid[-1]), grid, envelope)
         beyond = envelope[-1] + slope * np.maximum(d - grid[-1], 0.0)
-        return np.exp(np.where(d > grid[-1], beyond, inside))
+        a = np.exp(np.where(d > grid[-1], beyond, inside))
+        return a if self.floor is None else np.maximum(a, self.floor.amplitude(r_mm))
+
+    @property
+    def profile_end_mm(self) -> float:
+        """Centre distance [mm] beyond which the amplitude is the log-slope extension."""
+        return float(self.edge_radius_mm + self.distance_mm[-1])
 
 
 def site_positions(rows: int, cols: int, pitch_mm: float, grid: str) -> NDArray:
@@ -68,6 +80,18 @@ def site_positions(rows: int, cols: int, pitch_mm: float, grid: str) -> NDArray:
         x = x + 0.5 * (i % 2)
         y = y * np.sqrt(3.0) / 2.0
     return pitch_mm * np.column_stack([x.ravel(), y.ravel()])
+
+
+def beyond_profile_share(field: UnitField, positions: NDArray, site: int) -> float:
+    """Share (0..1) of the leakage power at ``site`` from neighbours farther than the
+    profile's last point (amplitudes from the log-slope extension, not the model)."""
+    r = np.linalg.norm(positions - positions[site], axis=1)
+    r = np.delete(r, site)
+    if not r.size:
+        return 0.0
+    a2 = field.amplitude(r) ** 2
+    total = float(a2.sum())
+    return 0.0 if total == 0 else float(a2[r > field.profile_end_mm].sum() / total)
 
 
 def crosstalk_matrix(field: UnitField, positions: NDArray) -> NDArray:

@@ -28,8 +28,12 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
     max_ratio = 0.1                 # ratio: leakage at a site / its own amplitude, at most
     superposition = "incoherent"    # "incoherent" (independent ERMs: powers add) | "worst"
     drive_level = 1.0               # perceptual: running amplitude / the surrogate's (nominal)
+    holds_at = "bounds_95"          # rank on the pitch at which the criterion holds with the
+                                    # model's 95 % bounds (default) | "nominal": the prediction
     # threshold_hz, threshold_um, threshold_source: perceptual: a threshold table of one's own
     # contactor_area_cm2: perceptual: rescale the curve to this contact area (3 dB / doubling)
+    # body_site = "thigh"           # where the array is worn: a warning when the threshold
+                                    # curve is for another site (the default: volar forearm)
 
     [timing]                        # the envelope timing of the chosen unit (planner.timing)
     model = "models/rom-default"    # the transient ROM; enabled = false skips the timing
@@ -72,13 +76,16 @@ from fieldspec.toml import read_toml_file
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
-           "load_layout"]
+           "load_layout", "short_repr"]
 
 GRIDS = ("square", "hex", "free")
 SUPERPOSITIONS = ("incoherent", "worst")
 OBJECTIVES = ("min_pitch", "max_sites")
 KINDS = ("ratio", "perceptual")
+HOLDS_AT = ("bounds_95", "nominal")
 MAX_SITES_PER_SIDE = 32
+MAX_FREQUENCIES = 64  # drive.frequencies_hz: values at most
+MAX_NAME = 64  # design.name: characters at most
 FREE_SITES = (2, 256)  # grid = "free": number of given positions
 POSITION_LIMIT_MM = 1000.0  # |x|, |y| of a free position: the pitch bound's 1 m
 
@@ -99,6 +106,23 @@ class CriterionSpec:
     kind: str = "ratio"
     drive_level: float = 1.0
     threshold: ThresholdCurve | None = None  # perceptual only
+    holds_at: str = "bounds_95"  # the pitch ranked and laid out: at the 95 % bounds | nominal
+    body_site: str | None = None  # where the array is worn (checked against the curve's site)
+
+    def warnings(self) -> list[str]:
+        """Perceptual criterion: a warning when the threshold curve is not for the body site
+        of the array (or no site is named), naming the curve used."""
+        t = self.threshold
+        if self.kind != "perceptual" or t is None or not t.site:
+            return []
+        if self.body_site is None:
+            return [f"no criterion.body_site given: the detection threshold is the {t.site} "
+                    f"curve ({t.source}); name the site, or give a threshold table for it"]
+        if self.body_site.strip().lower() in t.site.lower():
+            return []
+        return [f"criterion.body_site = {self.body_site!r} has no threshold data of its own: "
+                f"the {t.site} curve is used ({t.source}); give threshold_hz, threshold_um "
+                "and threshold_source measured at that site"]
 
 
 @dataclass(frozen=True)
@@ -137,19 +161,28 @@ _MODEL = {"path": Spec(str, "models/nn-default"),
           "allow_extrapolation": Spec(bool, False)}
 
 
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (long inputs are summarised, not echoed)."""
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
 def _read_positions(value: Any, spec: Spec, path: str, ctx: Context) -> tuple:
     """``[[x, y], ...]`` [mm]: FREE_SITES sites, each two finite numbers within the limit."""
     lo, hi = FREE_SITES
     if not isinstance(value, list | tuple) or not lo <= len(value) <= hi:
+        got = (f"a list of {len(value)} positions" if isinstance(value, list | tuple) else
+               short_repr(value))
         raise ctx.error(path, f"{path}: expected a list of {lo} to {hi} [x, y] positions [mm], "
-                        f"got {value!r}")
+                        f"got {got}")
     xy = Spec(tuple, None, f"[-{POSITION_LIMIT_MM:g}, {POSITION_LIMIT_MM:g}]")
     out = []
     for i, item in enumerate(value):
         where = f"{path}[{i}]"
         pair = read_value(item, xy, "positions_mm", where, ctx)
         if len(pair) != 2:
-            raise ctx.error(where, f"{where} = {item!r}: expected two numbers [x, y] [mm]")
+            raise ctx.error(where, f"{where} = {short_repr(item)}: expected two numbers [x, y] "
+                            "[mm]")
         out.append((pair[0], pair[1]))
     return tuple(out)
 
@@ -167,6 +200,8 @@ _CRITERION = {"kind": Spec(str, "ratio", choices=KINDS),
               "max_ratio": Spec(float, 0.1, "(0, 1]"),
               "superposition": Spec(str, "incoherent", choices=SUPERPOSITIONS),
               "drive_level": Spec(float, 1.0, "(0, 10]"),
+              "holds_at": Spec(str, "bounds_95", choices=HOLDS_AT),
+              "body_site": Spec(str, None),
               "threshold_hz": Spec(tuple, None, "(0, 1e4]"),
               "threshold_um": Spec(tuple, None, "(0, 1e4]"),
               "threshold_source": Spec(str, None),
@@ -186,8 +221,8 @@ def _inputs(raw: Any, path: str, ctx: Context) -> dict[str, Any]:
     table = require_table(raw, path, list(raw) if isinstance(raw, dict) else [], ctx)
     for key, value in table.items():
         if isinstance(value, bool) or not isinstance(value, int | float | str):
-            raise LayoutError(f"{path}.{key}", f"{path}.{key} = {value!r}: expected a number "
-                              "or a choice (text)")
+            raise LayoutError(f"{path}.{key}", f"{path}.{key} = {short_repr(value)}: expected a "
+                              "number or a choice (text)")
     return dict(table)
 
 
@@ -208,8 +243,9 @@ def _design(raw: Any, path: str, i: int, ctx: Context) -> dict[str, Any]:
                               f"{path}.any = true")
     d = _inputs(table, path, ctx)
     name = d.pop("name", f"design{i}")
-    if not isinstance(name, str) or not name:
-        raise LayoutError(f"{path}.name", f"{path}.name = {name!r}: expected a non-empty text")
+    if not isinstance(name, str) or not 0 < len(name) <= MAX_NAME:
+        raise LayoutError(f"{path}.name", f"{path}.name = {short_repr(name)}: expected a "
+                          f"non-empty text of at most {MAX_NAME} characters")
     return {"name": name, "inputs": d, **opts}
 
 
@@ -228,7 +264,8 @@ def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
         if extra:
             raise LayoutError(f"criterion.{extra[0]}", f"criterion.{extra[0]}: only for "
                               'criterion.kind = "perceptual"')
-        return CriterionSpec(c["max_ratio"], c["superposition"], "ratio", c["drive_level"])
+        return CriterionSpec(c["max_ratio"], c["superposition"], "ratio", c["drive_level"],
+                             holds_at=c["holds_at"], body_site=c["body_site"])
     curve = VERRILLO_1966_FOREARM
     if all(given):
         try:
@@ -246,7 +283,7 @@ def _criterion(c: dict[str, Any], freqs: tuple[float, ...]) -> CriterionSpec:
         raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {bad[0]:g} Hz is "
                           f"outside the threshold curve's range [{lo:g}, {hi:g}] Hz")
     return CriterionSpec(c["max_ratio"], c["superposition"], "perceptual", c["drive_level"],
-                         curve)
+                         curve, c["holds_at"], c["body_site"])
 
 
 def _sites(array: dict[str, Any]) -> tuple[int, int, tuple | None]:
@@ -316,6 +353,10 @@ def layout_from_dict(d: Any) -> LayoutRequest:
         if "frequency_hz" in x["inputs"]:
             raise LayoutError(f"design[{i}].frequency_hz", f"design[{i}].frequency_hz: the "
                               "drive frequency goes in [drive] frequencies_hz")
+    if len(drive["frequencies_hz"]) > MAX_FREQUENCIES:
+        n = len(drive["frequencies_hz"])
+        raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {n} values; give at "
+                          f"most {MAX_FREQUENCIES}")
     rows, cols, positions = _sites(array)
     return LayoutRequest(model["path"], rows, cols, array["grid"],
                          array["min_pitch_mm"], array["max_pitch_mm"], site,

@@ -6,7 +6,15 @@ alone and, with the envelope profile (:mod:`planner.crosstalk`), never grows wit
 smallest feasible pitch is found by bisection to ``PITCH_TOL_MM``. Units may not overlap: the
 pitch is at least two edge radii. The surrogate's uncertainty is carried through as a second,
 conservative pitch: the leakage of the upper 95 % bound of the neighbours' amplitudes against
-the lower bound of the site's own (log-normal, 1.96 sigma).
+the lower bound of the site's own (log-normal, 1.96 sigma), never below the nominal amplitude
+(so never a shorter pitch). By default (``criterion.holds_at = "bounds_95"``) candidates are
+ranked, and the array laid out, on that pitch; ``"nominal"`` uses the prediction alone.
+
+Before ranking (:mod:`planner.prepare`): every value is checked against the plan's validity
+domain (:mod:`planner.domain`), and drive frequencies the motor cannot reach within its
+voltage limit are dropped and listed. After ranking, the winner's timing is computed; a
+candidate whose timing cannot be computed is not playable and the next one wins (listed in
+``Plan.unplayable``), so a plan's winner is always playable.
 
 Criteria (:class:`planner.layout.CriterionSpec`): the *load* of a site is its leakage over
 what the criterion allows, so a pitch is feasible when every load is <= 1 and the margin is
@@ -30,20 +38,24 @@ sites win.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from planner.candidates import expand_any
-from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+from planner.crosstalk import (
+    UnitField,
+    beyond_profile_share,
+    crosstalk_matrix,
+    leakage_ratio,
+    site_positions,
+)
+from planner.domain import Domain, Extrapolation
 from planner.layout import MAX_SITES_PER_SIDE, LayoutError, LayoutRequest
+from planner.prepare import prepare
 from planner.region import largest_array, largest_pitch
 from planner.timing import plan_timing
-from surrogate.runtime import load_predictor
-from surrogate.runtime.encoding import PredictorInputError
 
 __all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "array_positions", "loads", "plan_layout",
            "smallest_pitch", "worst_load"]
@@ -63,9 +75,9 @@ class DesignResult:
     edge_radius_mm: float
     log_std_center: float
     log_std_profile_max: float
-    extrapolated: bool
-    pitch_mm: float | None  # None: infeasible within the pitch bounds
-    pitch_95_mm: float | None  # with the surrogate's 95 % bounds
+    extrapolated: bool  # an input outside the plan's domain (allow_extrapolation)
+    pitch_nominal_mm: float | None  # None: infeasible within the pitch bounds
+    pitch_95_mm: float | None  # with the surrogate's 95 % bounds (>= the nominal pitch)
     unit: UnitField | None = None  # the nominal amplitude field
     bound: UnitField | None = None  # the 95 % bound field (neighbours high, own low)
     felt: bool = True  # perceptual: own amplitude above the detection threshold
@@ -73,6 +85,20 @@ class DesignResult:
     load: float | None = None  # worst site load at pitch_mm (free positions: at the sites)
     family: str = ""  # the request's design table (an any = true table: its name)
     shape: tuple[int, int] | None = None  # max_sites: the (rows, cols) that fit the region
+    holds_at: str = "bounds_95"  # which pitch is the candidate's: "bounds_95" | "nominal"
+    extrapolations: list[Extrapolation] = field(default_factory=list)
+    beyond_profile: float = 0.0  # share of the worst site's leakage power from beyond the
+    # profile's last point (the log-slope extension), at the candidate's pitch
+
+    @property
+    def pitch_mm(self) -> float | None:
+        """The candidate's pitch [mm]: at the 95 % bounds or nominal (``holds_at``)."""
+        return self.pitch_95_mm if self.holds_at == "bounds_95" else self.pitch_nominal_mm
+
+    @property
+    def decision(self) -> UnitField | None:
+        """The field the criterion is judged on (the bound or the nominal one)."""
+        return self.bound if self.holds_at == "bounds_95" else self.unit
 
     @property
     def edge_to_edge_mm(self) -> float | None:
@@ -94,6 +120,10 @@ class Plan:
     loads: np.ndarray = field(default_factory=lambda: np.zeros(0))
     load_95: float | None = None  # worst load at the chosen pitch with the 95 % bound field
     timing: dict[str, Any] | None = None  # planner.timing.plan_timing of the chosen unit
+    domain: Domain | None = None  # the intersection of the models' ranges
+    dropped: list[dict[str, Any]] = field(default_factory=list)  # unreachable frequencies
+    unplayable: list[dict[str, Any]] = field(default_factory=list)  # better, but no timing
+    profile_end_mm: float = 0.0  # the model profile's last distance from the unit's edge
 
     def shown(self) -> list[DesignResult]:
         """The candidates worth listing: every named design, and of each ``any = true`` table
@@ -192,56 +222,12 @@ def is_felt(center_um: float, req: LayoutRequest, frequency_hz: float) -> bool:
         center_um * crit.drive_level >= float(crit.threshold(frequency_hz))
 
 
-def _designs(req: LayoutRequest, predictor: Any) -> list[tuple[int, dict[str, Any]]]:
-    """(index in the request, design) for every candidate: named designs as given, each
-    ``any = true`` table expanded (:func:`planner.candidates.expand_any`)."""
-    fixed = {*req.site, "frequency_hz"}
-    out: list[tuple[int, dict[str, Any]]] = []
-    for i, d in enumerate(req.designs):
-        if not d.get("any"):
-            out.append((i, d))
-            continue
-        unknown = [k for k in d["inputs"] if k not in predictor.input_names]
-        if unknown:
-            raise LayoutError(f"design[{i}].{unknown[0]}", f"design[{i}].{unknown[0]}: not an "
-                              f"input of {req.model} (inputs: {', '.join(predictor.input_names)})")
-        try:
-            out += [(i, x) for x in expand_any(d, predictor.specs, fixed, f"design[{i}]")]
-        except ValueError as err:
-            raise LayoutError(f"design[{i}].n_candidates", str(err)) from None
-    return out
-
-
-def _predict(req: LayoutRequest) -> tuple[Any, list[tuple[dict, float]], dict[str, Any]]:
-    predictor = load_predictor(req.model)
-    combos = list(itertools.product(_designs(req, predictor), req.frequencies_hz))
-    rows = [{**req.site, **d["inputs"], "frequency_hz": f} for (_, d), f in combos]
-    names = predictor.input_names
-    for i, row in enumerate(rows):
-        missing = [n for n in names if n not in row]
-        unknown = [k for k in row if k not in names]
-        where = f"design[{combos[i][0][0]}]"
-        if unknown:
-            raise LayoutError(f"{where}.{unknown[0]}", f"{where}.{unknown[0]}: not an input of "
-                              f"{req.model} (inputs: {', '.join(names)})")
-        if missing:
-            raise LayoutError(f"{where}.{missing[0]}", f"{where}: no value for model input "
-                              f"{missing[0]!r}; give it in the design or in [site]")
-    X = {n: np.array([r[n] for r in rows]) for n in names}
-    try:
-        out = predictor.predict(X, extrapolate=req.allow_extrapolation)
-    except PredictorInputError as err:
-        raise LayoutError(f"design.{err.field}", f"design or site input {err}; set "
-                          "model.allow_extrapolation = true to plan outside the trained "
-                          "range (flagged in the plan)") from None
-    return predictor, [(d, f) for (_, d), f in combos], out
-
-
 def _key(r: DesignResult, free: bool) -> tuple[float, ...]:
     """Sort key of a feasible candidate: the most sites (max_sites), then the smallest
     pitch (free positions: smallest worst load), then the larger own amplitude."""
     sites = -r.shape[0] * r.shape[1] if r.shape is not None else 0
-    return (sites, (r.load if free else r.pitch_mm), -r.center_um)  # type: ignore[return-value]
+    own = r.decision.center_um if r.decision is not None else r.center_um
+    return (sites, (r.load if free else r.pitch_mm), -own)  # type: ignore[return-value]
 
 
 def _shaped(req: LayoutRequest, r: DesignResult) -> LayoutRequest:
@@ -293,51 +279,79 @@ def _check_overlap(req: LayoutRequest, results: list[DesignResult]) -> None:
                       f"unit is {smallest:.3g} mm across); sites must be at least that apart")
 
 
+def _evaluate(req: LayoutRequest, design: dict[str, Any], freq: float, k: int,
+              prep: Any) -> DesignResult:
+    """One candidate: its nominal and bound fields, pitches and load."""
+    out, grid = prep.out, prep.predictor.profile_distance_mm
+    center, profile = out["center_amplitude_um"][k], out["profile_um"][k]
+    s_c, s_p = out["center_amplitude_um_log_std"][k], out["profile_um_log_std"][k]
+    edge = float(out["edge_radius_mm"][k])
+    nominal = UnitField(float(center), edge, grid, profile)
+    bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
+                      profile * np.exp(Z95 * s_p), floor=nominal)
+    holds_at = req.criterion.holds_at
+    decide = bound if holds_at == "bounds_95" else nominal
+    felt = is_felt(decide.center_um, req, freq)
+    shaped = _fill_region(decide, req, freq) if felt else None
+    p_nom = smallest_pitch(nominal, shaped, freq) if shaped else None
+    p_95 = smallest_pitch(bound, shaped, freq) if shaped else None
+    if p_95 is not None and p_nom is not None:
+        p_95 = max(p_95, p_nom)  # the bounds never ask for less room than the prediction
+    ex = prep.extrapolations[k]
+    flagged = bool(ex) or ("extrapolated" in out and bool(out["extrapolated"][k]))
+    r = DesignResult(
+        design["name"], freq, dict(design["inputs"]), float(center), edge, float(s_c),
+        float(s_p.max()), flagged, p_nom, p_95, nominal, bound, felt,
+        float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"]),
+        shape=None if shaped is None or req.objective != "max_sites" else
+        (shaped.rows, shaped.cols), holds_at=holds_at, extrapolations=list(ex))
+    if r.pitch_mm is not None:
+        shaped_req = _shaped(req, r)
+        pos = array_positions(shaped_req, r.pitch_mm)
+        r.load = worst_load(decide, shaped_req, r.pitch_mm, freq)
+        if len(pos) > 1:
+            worst = int(np.argmax(loads(crosstalk_matrix(decide, pos), shaped_req, freq)))
+            r.beyond_profile = beyond_profile_share(decide, pos, worst)
+    return r
+
+
+def _playable(req: LayoutRequest, ranked: list[DesignResult], rom: Any
+              ) -> tuple[DesignResult | None, dict[str, Any] | None, list[dict[str, Any]]]:
+    """The best candidate whose timing can be computed (timing disabled: the best), its
+    timing, and the better ones skipped with the reason."""
+    skipped: list[dict[str, Any]] = []
+    for r in ranked:
+        if not req.timing.enabled:
+            return r, None, skipped
+        timing = plan_timing(_shaped(req, r), r, model=rom)
+        if not timing.get("unavailable"):
+            return r, timing, skipped
+        skipped.append({"name": r.name, "frequency_hz": r.frequency_hz,
+                        "reason": timing["unavailable"]})
+    return None, None, skipped
+
+
 def plan_layout(req: LayoutRequest) -> Plan:
-    """Evaluate every design at every drive frequency, pick the smallest feasible pitch
-    (ties: the larger own amplitude); with free positions, the feasible design with the
-    smallest worst load (the largest margin) at the given sites."""
-    predictor, combos, out = _predict(req)
-    grid = predictor.profile_distance_mm
-    results = []
-    for k, (design, freq) in enumerate(combos):
-        center, profile = out["center_amplitude_um"][k], out["profile_um"][k]
-        s_c, s_p = out["center_amplitude_um_log_std"][k], out["profile_um_log_std"][k]
-        edge = float(out["edge_radius_mm"][k])
-        nominal = UnitField(float(center), edge, grid, profile)
-        bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
-                          profile * np.exp(Z95 * s_p))
-        felt = is_felt(float(center), req, float(freq))
-        shaped = _fill_region(nominal, req, float(freq)) if felt else req
-        results.append(DesignResult(
-            design["name"], float(freq), dict(design["inputs"]), float(center), edge,
-            float(s_c), float(s_p.max()),
-            bool(out["extrapolated"][k]) if "extrapolated" in out else False,
-            smallest_pitch(nominal, shaped, freq) if felt and shaped else None,
-            smallest_pitch(bound, shaped, freq) if felt and shaped else None, nominal, bound,
-            felt,
-            float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"]),
-            shape=None if not felt or not shaped else (shaped.rows, shaped.cols)))
-    for r in results:
-        if r.pitch_mm is not None and r.shape is not None:
-            r.load = worst_load(r.unit, _shaped(req, r), r.pitch_mm, r.frequency_hz)
-        elif r.pitch_mm is not None:
-            r.load = worst_load(r.unit, req, r.pitch_mm, r.frequency_hz)
-    feasible = [r for r in results if r.pitch_mm is not None]
+    """Evaluate every design at every reachable drive frequency, pick the smallest feasible
+    pitch (ties: the larger own amplitude) whose timing can be computed; with free
+    positions, the feasible design with the smallest worst load (the largest margin) at the
+    given sites."""
+    prep = prepare(req)
+    results = [_evaluate(req, d, float(f), k, prep) for k, (d, f) in enumerate(prep.combos)]
     free = req.positions_mm is not None
     if free:
         _check_overlap(req, results)
-    best = min(feasible, key=lambda r: _key(r, free)) if feasible else None
+    ranked = sorted((r for r in results if r.pitch_mm is not None), key=lambda r: _key(r, free))
+    best, timing, skipped = _playable(req, ranked, prep.rom)
     if best is not None:
         req = _shaped(req, best)
-    result = Plan(req, results, best)
+    result = Plan(req, results, best, timing=timing, domain=prep.domain,
+                  dropped=prep.dropped, unplayable=skipped,
+                  profile_end_mm=float(prep.predictor.profile_distance_mm[-1]))
     if best is not None:
-        f = best.unit
         result.positions_mm = array_positions(req, best.pitch_mm)
-        result.crosstalk_um = crosstalk_matrix(f, result.positions_mm)
+        result.crosstalk_um = crosstalk_matrix(best.unit, result.positions_mm)
         result.ratios = leakage_ratio(result.crosstalk_um, req.criterion.superposition)
         result.loads = loads(result.crosstalk_um, req, best.frequency_hz)
         result.load_95 = worst_load(best.bound, req, best.pitch_mm, best.frequency_hz)
-        if req.timing.enabled:
-            result.timing = plan_timing(req, best)
     return result

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-import figstyle
+from planner.figure import write_plan_plot
 from planner.optimise import PITCH_TOL_MM, Z95, Plan
 from planner.plan_record import KIND, SCHEMA_VERSION
 
@@ -21,10 +20,15 @@ def _r(x: float | None, digits: int = 4) -> float | None:
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
     """Everything a user or the play step needs: request, candidates, the chosen array (not
     yet sealed: ``planner.plan_record.seal_plan`` adds the digest when it is written)."""
+    from planner.summary import validity
+
     req = plan.request
     cands = [{"name": c.name, "frequency_hz": c.frequency_hz, "inputs": c.inputs,
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
-              "pitch_mm": _r(c.pitch_mm, 3), "pitch_95_mm": _r(c.pitch_95_mm, 3),
+              "pitch_mm": _r(c.pitch_mm, 3), "pitch_nominal_mm": _r(c.pitch_nominal_mm, 3),
+              "pitch_95_mm": _r(c.pitch_95_mm, 3),
+              "leakage_share_beyond_profile": _r(c.beyond_profile),
+              "extrapolated_inputs": [str(x) for x in c.extrapolations],
               "edge_to_edge_mm": _r(c.edge_to_edge_mm, 3),
               "worst_load": _r(c.load), "shape": c.shape, "log_std_center": _r(c.log_std_center),
               "log_std_profile_max":
@@ -35,9 +39,11 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
     criterion: dict[str, Any] = {
         "kind": crit.kind, "max_ratio": crit.max_ratio, "superposition": crit.superposition,
         "profile": "envelope (largest amplitude at any larger distance)",
-        "pitch_tolerance_mm": PITCH_TOL_MM, "drive_level": crit.drive_level}
+        "pitch_tolerance_mm": PITCH_TOL_MM, "drive_level": crit.drive_level,
+        "holds_at": crit.holds_at}
     if crit.threshold is not None:
         t = crit.threshold
+        criterion["body_site"] = crit.body_site
         criterion["threshold"] = {
             "source": t.source, "site": t.site, "contactor_area_cm2": t.contactor_area_cm2,
             "frequency_hz": list(t.frequency_hz),
@@ -62,6 +68,10 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "criterion_load": np.round(plan.loads, 6).tolist(),
         "uncertainty": None if best is None else uncertainty(plan),
         "timing": plan.timing,
+        "validity": validity(plan),
+        "dropped_frequencies": plan.dropped,
+        "not_playable": plan.unplayable,
+        "warnings": crit.warnings(),
     }
 
 
@@ -79,68 +89,5 @@ def uncertainty(plan: Plan) -> dict[str, Any]:
             "margin_95": None if load95 is None else (None if load95 == 0 else
                                                       _r(1.0 / load95)),
             "criterion_holds_at_95": load95 is not None and load95 <= 1.0,
-            "pitch_95_mm": _r(b.pitch_95_mm, 3), "extrapolated": b.extrapolated}
-
-
-_PLOTTED = {
-    "ratio": "left: unit sites (mm) coloured by the leakage ratio (neighbours' amplitude / own "
-             "centre amplitude); right: each candidate's predicted skin amplitude against "
-             "distance from its centre, relative to its own centre amplitude (the unit's "
-             "face), with the criterion",
-    "perceptual": "left: unit sites (mm) coloured by the leakage over the detection threshold; "
-                  "right: each candidate's predicted skin amplitude (um) against distance from "
-                  "its centre at the drive level, with the detection threshold at each "
-                  "frequency",
-}
-
-
-def write_plan_plot(plan: Plan, path: str | Path) -> None:
-    """Left: the array (sites coloured by leakage ratio, unit outlines); right: each
-    candidate's amplitude against distance from its centre, with the criterion."""
-    from matplotlib.patches import Circle
-
-    fig, (ax, bx) = figstyle.figure(1, 2, width_in=11, height_in=5.2)
-    best = plan.best
-    if best is not None:
-        pos = plan.positions_mm
-        sc = ax.scatter(pos[:, 0], pos[:, 1], c=plan.ratios, cmap="viridis", zorder=3,
-                        vmin=0, vmax=plan.request.criterion.max_ratio)
-        if plan.request.criterion.kind == "perceptual":
-            sc.set_array(plan.loads)
-            sc.set_clim(0, 1)
-        for x, y in pos:
-            ax.add_patch(Circle((x, y), best.edge_radius_mm, fill=False, color="0.4"))
-        fig.colorbar(sc, ax=ax, label="leakage / own amplitude" if plan.request.criterion.kind
-                     == "ratio" else "leakage / detection threshold")
-        spacing = ("nearest sites" if plan.request.grid == "free" else "pitch")
-        ax.set_title(f"{best.name} at {best.frequency_hz:g} Hz: {spacing} "
-                     f"{best.pitch_mm:.2f} mm")
-    else:
-        ax.set_title("no design meets the criterion within the pitch bounds")
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    crit = plan.request.criterion
-    perceptual = crit.kind == "perceptual"
-    for c in plan.shown():
-        f = c.unit
-        r = np.linspace(f.edge_radius_mm, plan.request.max_pitch_mm, 300)
-        y = f.amplitude(r) * crit.drive_level if perceptual else f.amplitude(r) / f.center_um
-        line, = bx.semilogy(r, y, label=f"{c.name}, {c.frequency_hz:g} Hz")
-        if perceptual:
-            bx.axhline(float(crit.threshold(c.frequency_hz)), color=line.get_color(), ls=":",
-                       lw=1)
-    if perceptual:
-        bx.plot([], [], "k:", lw=1, label="detection threshold (dotted, per frequency)")
-        bx.set_ylabel(f"amplitude at drive level {crit.drive_level:g} [um]")
-    else:
-        bx.axhline(crit.max_ratio, color="k", ls="--", lw=1, label="criterion (one neighbour)")
-        bx.set_ylabel("amplitude / own center amplitude")
-    bx.set_xlabel("distance from unit centre [mm]")
-    bx.legend(fontsize=8)
-    figstyle.annotate(
-        fig, "Array plan", design=("best: " + best.name) if best is not None else
-        "no design meets the criterion",
-        frequency=", ".join(sorted({f"{c.frequency_hz:g} Hz" for c in plan.candidates})),
-        plotted=_PLOTTED["perceptual" if perceptual else "ratio"])
-    figstyle.save(fig, path)
+            "pitch_95_mm": _r(b.pitch_95_mm, 3), "pitch_nominal_mm": _r(b.pitch_nominal_mm, 3),
+            "holds_at": b.holds_at, "extrapolated": b.extrapolated}

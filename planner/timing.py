@@ -82,8 +82,9 @@ def voltage_for_frequency(motor: Any, frequency_hz: float) -> float:
     v = motor.start_voltage_V + frequency_hz * per_hz
     if v > motor.max_voltage_V:
         top = (motor.max_voltage_V - motor.start_voltage_V) / per_hz
-        raise TimingError("frequency_hz", f"{frequency_hz:g} Hz needs {v:.2f} V, above the "
-                          f"motor's {motor.max_voltage_V:g} V limit (at most {top:.0f} Hz)")
+        raise TimingError("frequency_hz", f"{frequency_hz:g} Hz needs {v:.3f} V, above the "
+                          f"motor's {motor.max_voltage_V:g} V limit (at most "
+                          f"{np.floor(top * 100) / 100:g} Hz)")
     return v
 
 
@@ -187,14 +188,16 @@ def rom_response(model: Any, design: Mapping[str, Any], *, extrapolate: bool = F
     return respond
 
 
-def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4) -> dict[str, Any]:
+def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
+                model: Any = None) -> dict[str, Any]:
     """The ``timing`` object of a plan: :class:`Timing` of the chosen unit (``best``, a
     :class:`planner.optimise.DesignResult`) on the request's ROM, at the voltage that spins
     the motor at the plan's frequency. The ROM's inputs are taken from the site and design
     (skin, fat, orientation, attachment) and the request's motor time constants; it has no
     ring inputs (its training units all carry the paper's three rings), so ring designs share
     its timing. When the timing cannot be computed, every key is null and ``unavailable``
-    says why."""
+    says why. ``model``: the loaded ROM (else loaded from the request). ``extrapolated``
+    lists the ROM inputs outside its trained range (``model.allow_extrapolation``)."""
     from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
 
     spec = request.timing
@@ -207,13 +210,17 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4) -> dict[str, Any
     extra = {"model": spec.model, "isi_level_basis": basis,
              "tau_spinup_ms": spec.tau_spinup_ms, "tau_spindown_ms": spec.tau_spindown_ms}
     try:
-        model = load_envelope_model(spec.model)
+        model = model if model is not None else load_envelope_model(spec.model)
         inputs = {**request.site, **best.inputs, "tau_spinup_ms": spec.tau_spinup_ms,
                   "tau_spindown_ms": spec.tau_spindown_ms}
         design = {k: inputs[k] for k in model.input_names if k in inputs}
         missing = [k for k in model.input_names if k not in design]
         if missing:
             raise TimingError(missing[0], f"the ROM needs {missing[0]!r} (site or design)")
+        ranges = model.input_ranges
+        outside = sorted(k for k, v in design.items() if not isinstance(ranges[k][0], str)
+                         and not ranges[k][0] <= float(v) <= ranges[k][1])
+        extra["extrapolated"] = outside
         nominal = voltage_for_frequency(model.motor, best.frequency_hz)
         timing = envelope_timing(rom_response(model, design,
                                               extrapolate=request.allow_extrapolation),

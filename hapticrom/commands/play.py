@@ -232,7 +232,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "device's if lower)")
     p.add_argument("--max-duty", type=_fraction, metavar="FRACTION",
                    help="largest on-time fraction of any 60 s window (default 0.5)")
-    p.add_argument("--watchdog-ms", type=_positive_ms, metavar="MS",
+    p.add_argument("--watchdog-ms", type=number_in(0.0, 60_000.0, "ms"), metavar="MS",
                    help="serial: the heartbeat deadline the host keeps (default 250, or the "
                    "device's if shorter)")
     p.add_argument("--exposure-action", type=_action, metavar="M/S2",

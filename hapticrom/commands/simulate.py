@@ -50,6 +50,10 @@ def run(args: argparse.Namespace) -> int:
 
     limit = DEFAULT_MAX_UNKNOWNS if args.max_unknowns is None else args.max_unknowns
     scene = load_scene(args.scene)
+    if scene.analysis.kind == "sweep" and args.vtk is not None:
+        raise ValueError("--vtk writes one solution field; a sweep has one per "
+                         "frequency: use --json (complex values at every frequency) or "
+                         "--plot, or a harmonic scene at the frequency of interest")
     est = check_cost(scene, limit)
     if est.seconds > 30 and not args.quiet:  # say so before a long run starts
         print(f"hapticrom simulate: about {est.unknowns:.3g} unknowns, ~{est.memory_gb:.2g} GB, "
@@ -69,9 +73,11 @@ def run(args: argparse.Namespace) -> int:
             write_vtk(str(tmp), result.domain, result.nodal)
     if args.plot:
         from fem.plots import plot_result
+        from fem.sweep_output import plot_sweep
 
+        plot = plot_sweep if scene.analysis.kind == "sweep" else plot_result
         with atomic_path(args.plot) as tmp:
-            plot_result(str(tmp), result, name)
+            plot(str(tmp), result, name)
     for opt in _OUTPUTS:
         if getattr(args, opt):
             print(f"wrote {getattr(args, opt)}")

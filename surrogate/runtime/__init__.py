@@ -1,9 +1,11 @@
 """Run-time prediction with numpy and onnxruntime only (no torch, scikit-learn, pysindy or
 FE solver): ``load_predictor(path).predict(X)`` for the steady amplitudes and profiles,
-``load_envelope_model(path).simulate(t_s, volts, design)`` for the transient envelope."""
+``load_envelope_model(path).simulate(t_s, volts, design)`` for the transient envelope;
+``load_model(name_or_path)`` for either, by name (installed model packages) or path."""
 
 from surrogate.runtime.card import ModelFileError
 from surrogate.runtime.encoding import InputSpec, PredictorInputError
+from surrogate.runtime.models import find_model, load_model
 from surrogate.runtime.predictor import Predictor, load_predictor
 from surrogate.runtime.rom import (
     EnvelopeModel,
@@ -13,4 +15,5 @@ from surrogate.runtime.rom import (
 )
 
 __all__ = ["EnvelopeModel", "InputSpec", "ModelFileError", "Predictor", "PredictorInputError",
-           "RomBlowUpError", "RomInputError", "load_envelope_model", "load_predictor"]
+           "RomBlowUpError", "RomInputError", "find_model", "load_envelope_model", "load_model",
+           "load_predictor"]

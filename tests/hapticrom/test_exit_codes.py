@@ -47,6 +47,7 @@ def test_help_is_0_and_a_missing_command_is_2(capsys):
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "nonsense"],
     ["emulate", "--channels", "0"],
     ["bench", "accuracy", "--quick", "--out", "{tmp}/no/such/dir/report.txt"],
+    ["explore", "{tmp}/none", "--build-only"],
 ])
 def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
     rc = main([a.replace("{tmp}", str(tmp_path)) for a in argv])
@@ -57,7 +58,7 @@ def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
 
 def test_every_command_has_a_bad_input_case_above():
     covered = {"simulate", "reproduce", "generate", "dataset", "ingest", "train", "refine",
-               "predict", "models", "plan", "play", "emulate", "bench"}
+               "predict", "models", "plan", "play", "emulate", "bench", "explore"}
     assert covered == set(COMMANDS)
 
 

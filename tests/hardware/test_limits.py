@@ -115,10 +115,10 @@ def test_an_edited_on_time_or_duty_cannot_raise_the_limits(tmp_path, capsys):
 
 
 def test_a_user_value_above_a_limit_is_refused_in_its_own_units(tmp_path, capsys):
-    rc, lines = play(tmp_path, line_plan(), PATTERN, "--watchdog-ms", "100000")
+    rc, lines = play(tmp_path, line_plan(), PATTERN, "--watchdog-ms", "5000")
     err = capsys.readouterr().err
-    assert rc == 2 and "--watchdog-ms 100000: a user setting can only lower a limit; " \
-        "watchdog_s is 0.25 (project default" in err
+    assert rc == 2 and "--watchdog-ms 5000: a user setting can only lower a limit; " \
+        "the limit is 250 ms (project default" in err and "watchdog_s" not in err
     assert refused(lines)["field"] == "--watchdog-ms"
 
 

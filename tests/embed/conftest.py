@@ -1,0 +1,103 @@
+"""Fixtures of the embedding tests: sealed copies of the shipped models, random in-range
+designs, and the JavaScript tools (node, the npm packages of embed/, chromium).
+
+A test that needs node or chromium is skipped, saying what is missing, unless
+HAPTICROM_REQUIRE_JS=1 (``make test`` sets it after installing them), which turns the skip into
+a failure."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from surrogate.runtime.encoding import InputSpec
+
+REPO = Path(__file__).resolve().parents[2]
+EMBED = REPO / "embed"
+
+
+def canonical_sha256(card: dict) -> str:
+    """sha256 hex of the canonical JSON of a card without card_sha256 (TEAM interface 1)."""
+    body = {k: v for k, v in card.items() if k != "card_sha256"}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def seal_copy(model: str, dest: Path) -> Path:
+    """A copy of models/MODEL under dest whose card carries card_sha256."""
+    target = dest / model
+    shutil.copytree(REPO / "models" / model, target)
+    card = json.loads((target / "card.json").read_text())
+    card["card_sha256"] = canonical_sha256(card)
+    (target / "card.json").write_text(json.dumps(card, indent=1) + "\n")
+    return target
+
+
+@pytest.fixture(scope="session")
+def sealed(tmp_path_factory) -> dict[str, Path]:
+    """Sealed copies of nn-default and gp-default."""
+    dest = tmp_path_factory.mktemp("sealed")
+    return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default")}
+
+
+def random_designs(card: dict, n: int, seed: int) -> list[dict]:
+    """n designs drawn inside the trained range (log-uniform on log inputs, every choice and
+    integer), the first rows at the corners of the range."""
+    rng = np.random.default_rng(seed)
+    rows: list[dict] = [{} for _ in range(n)]
+    for d in card["inputs"]:
+        s = InputSpec.from_dict(d)
+        if s.type == "categorical":
+            vals = [s.choices[k] for k in rng.integers(0, len(s.choices), n)]
+        elif s.type == "integer":
+            vals = [int(v) for v in rng.integers(int(s.low), int(s.high) + 1, n)]
+        elif s.scale == "log":
+            vals = np.exp(rng.uniform(np.log(s.low), np.log(s.high), n)).tolist()
+        else:
+            vals = rng.uniform(s.low, s.high, n).tolist()
+        if s.type != "categorical":
+            vals[0], vals[1] = s.low, s.high  # the ends of the range are inside it
+            vals[0] = int(vals[0]) if s.type == "integer" else vals[0]
+            vals[1] = int(vals[1]) if s.type == "integer" else vals[1]
+        for row, v in zip(rows, vals, strict=True):
+            row[s.name] = v
+    return rows
+
+
+def columns(rows: list[dict]) -> dict[str, list]:
+    """Row objects -> the predictor's mapping name -> values."""
+    return {k: [r[k] for r in rows] for k in rows[0]}
+
+
+def _require(what: str) -> None:
+    if os.environ.get("HAPTICROM_REQUIRE_JS") == "1":
+        pytest.fail(f"{what} (HAPTICROM_REQUIRE_JS=1: `make test` installs it)")
+    pytest.skip(what)
+
+
+@pytest.fixture(scope="session")
+def node() -> str:
+    """The node executable, with embed/node_modules installed (`npm ci` in embed/)."""
+    exe = shutil.which("node")
+    if exe is None:
+        _require("node is not installed")
+    if not (EMBED / "node_modules" / "onnxruntime-node").is_dir():
+        _require("embed/node_modules is missing: run `npm ci` in embed/")
+    return exe
+
+
+@pytest.fixture(scope="session")
+def chromium(node) -> str:
+    """Debian's chromium, and playwright-core in embed/node_modules."""
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        _require("chromium is not installed (apt-get install chromium)")
+    if not (EMBED / "node_modules" / "playwright-core").is_dir():
+        _require("embed/node_modules is missing: run `npm ci` in embed/")
+    return exe

@@ -1,0 +1,132 @@
+"""The design explorer (embed/explorer), built by `hapticrom explore`'s builder and served by
+its server, in a real headless chromium: it loads with every other origin blocked, a slider
+moved with the keyboard updates the plot and the numbers, and for 20 random designs the
+numbers on the page equal the Python predictor's."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+from conftest import EMBED, columns, random_designs
+
+from hapticrom.commands.explore import build_explorer, make_server
+from surrogate.runtime import load_predictor
+
+RTOL = 1e-6
+Z95 = 1.959964
+
+
+@pytest.fixture(scope="module")
+def page(chromium, node, sealed, tmp_path_factory):
+    """Build, serve, drive the page once; the check script's report and the designs."""
+    tmp = tmp_path_factory.mktemp("explorer")
+    site = build_explorer(str(sealed["nn-default"]), tmp / "site")
+    server = make_server(site, port=0)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    predictor = load_predictor(sealed["nn-default"])
+    designs = random_designs(predictor.card, 20, seed=7)
+    (tmp / "designs.json").write_text(json.dumps(designs))
+    try:
+        run = subprocess.run([node, "explorer/check.mjs", "--url",
+                              f"http://127.0.0.1:{server.server_address[1]}/",
+                              "--designs", str(tmp / "designs.json"), "--out",
+                              str(tmp / "result.json"), "--chromium", chromium,
+                              "--screenshot", str(tmp / "shot.png")],
+                             cwd=EMBED, capture_output=True, text=True, timeout=180, check=False)
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert run.returncode == 0, run.stderr
+    return json.loads((tmp / "result.json").read_text()), designs, predictor, tmp
+
+
+def test_loads_offline_without_errors(page):
+    result, _, _, tmp = page
+    assert result["offline"] == []  # nothing asked of another origin (no CDN)
+    assert result["errors"] == []
+    assert (tmp / "shot.png").stat().st_size > 10_000
+
+
+def test_a_slider_change_redraws_the_plot(page):
+    result, _, predictor, _ = page
+    before, after = result["slider"]["before"], result["slider"]["after"]
+    high = predictor.input_ranges["frequency_hz"][1]
+    assert before["frequency_hz"] < high == after["frequency_hz"]  # End key: the range's end
+    assert after["runs"] == before["runs"] + 1 and after["status"] == ""
+    assert after["mean"] != before["mean"] and after["band"] != before["band"]
+    assert after["center"] != before["center"]
+
+
+def test_page_numbers_equal_the_python_predictor(page):
+    result, designs, predictor, _ = page
+    want = predictor.predict(columns(designs))
+    band = {"profile_um_low95": want["profile_um"] * np.exp(-Z95 * want["profile_um_log_std"]),
+            "profile_um_high95": want["profile_um"] * np.exp(Z95 * want["profile_um_log_std"])}
+    worst = 0.0
+    for i, got in enumerate(result["designs"]):
+        assert got["status"] == ""
+        for key in ("center_amplitude_um", "edge_amplitude_um", "normalized_edge",
+                    "edge_radius_mm", "profile_um", "profile_um_low95", "profile_um_high95"):
+            ref = band[key][i] if key in band else want[key][i]
+            np.testing.assert_allclose(got[key], ref, rtol=RTOL, err_msg=f"design {i}: {key}")
+            worst = max(worst, float(np.max(np.abs(np.subtract(got[key], ref)) / np.abs(ref))))
+    print(f"explorer vs Python, 20 designs: max relative difference {worst:.2e}")
+
+
+def test_array_preview_follows_the_planner(page):
+    """The page's neighbour amplitude and worst leakage are the planner's crosstalk rules
+    (planner/crosstalk.py) applied to the page's own predicted profile."""
+    from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_positions
+
+    result, _, predictor, _ = page
+    for got in result["designs"]:
+        a = got["array"]
+        field = UnitField(got["center_amplitude_um"], got["edge_radius_mm"],
+                          predictor.profile_distance_mm, np.asarray(got["profile_um"]))
+        pitch = max(a["pitch"], 2 * got["edge_radius_mm"])
+        C = crosstalk_matrix(field, site_positions(a["rows"], a["cols"], pitch, a["grid"]))
+        np.testing.assert_allclose(a["neighbour_um"], field.amplitude(np.array([pitch]))[0],
+                                   rtol=1e-9)
+        np.testing.assert_allclose(a["worst_leakage"], leakage_ratio(C, "incoherent").max(),
+                                   rtol=1e-9)
+
+
+def test_explore_refuses_an_unsealed_or_non_predictor_model(tmp_path, capsys):
+    import shutil
+
+    from conftest import REPO
+
+    from hapticrom.cli import main
+
+    unsealed = tmp_path / "nn"
+    shutil.copytree(REPO / "models/nn-default", unsealed)
+    card = json.loads((unsealed / "card.json").read_text())
+    card.pop("card_sha256", None)
+    (unsealed / "card.json").write_text(json.dumps(card))
+    site = tmp_path / "site"
+    assert main(["explore", str(unsealed), "--build-only", "--out", str(site)]) == 2
+    assert "card_sha256" in capsys.readouterr().err
+    from conftest import seal_copy
+
+    rom = seal_copy("rom-default", tmp_path)
+    assert main(["explore", str(rom), "--build-only", "--out", str(site)]) == 2
+    assert "'rom' model" in capsys.readouterr().err
+    assert not site.exists()  # nothing written
+
+
+def test_explore_builds_once_then_reuses(node, sealed, tmp_path, capsys):
+    from hapticrom.cli import main
+
+    site = tmp_path / "site"
+    assert main(["explore", str(sealed["nn-default"]), "--build-only", "--out", str(site)]) == 0
+    stamp = (site / "build.json").stat().st_mtime_ns
+    assert sorted(p.name for p in (site / "model").iterdir()) == ["card.json", "model.onnx"]
+    assert (site / "ort" / "ort-wasm-simd-threaded.wasm").is_file()
+    assert main(["explore", str(sealed["nn-default"]), "--build-only", "--out", str(site)]) == 0
+    assert (site / "build.json").stat().st_mtime_ns == stamp  # up to date: not rebuilt
+    assert not (tmp_path / "site.building").exists()
