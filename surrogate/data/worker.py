@@ -45,14 +45,10 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _solve(scene: Any) -> Any:
-    """A :class:`fem.simulation.SimulationResult`, or a ``fem.sweep.SweepResult`` for a sweep
-    scene (the reduced-order sweep over its band)."""
+    """``fem.simulate``: a :class:`fem.simulation.SimulationResult`, or a
+    ``fem.sweep.SweepResult`` for a sweep scene (the reduced-order sweep over its band)."""
     import fem
 
-    if getattr(scene.analysis, "kind", None) == "sweep":
-        from fem.sweep import sweep
-
-        return sweep(scene)
     return fem.simulate(scene)
 
 

@@ -223,12 +223,12 @@ def test_validate_checks_the_sweep_columns(tmp_path, column, change, words):
 
 
 def test_a_non_finite_sweep_is_a_failed_row(monkeypatch):
-    import fem.sweep
+    import fem
     from surrogate.data.worker import run_sample
 
     bad = fake_sweep(1)
     bad.center[3, 1] = np.nan
-    monkeypatch.setattr(fem.sweep, "sweep", lambda scene: bad)
+    monkeypatch.setattr(fem, "simulate", lambda scene: bad)
     out = run_sample(_space().resolve(_space().center()))
     assert out["status"] == "failed" and "sweep_center_uz_re_um contains NaN" in out["error"]
 

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+import fem
 from fem.scene import scene_from_dict
-from fem.sweep import sweep
 from surrogate.data.columns import sweep_arrays, sweep_columns
 from surrogate.data.generate import generate
 from surrogate.data.inspect import dataset_info, validate_dataset
@@ -53,7 +53,7 @@ def test_process_pool_sweeps_match_direct_sweeps_and_resume(tmp_path):
     df = _frame(out)
     planned, _ = plan_samples(space, 3)
     assert df["sample_id"].tolist() == [p.sample_id for p in planned]
-    direct = sweep(scene_from_dict(planned[1].scene))  # what fem.simulate runs for a sweep
+    direct = fem.simulate(scene_from_dict(planned[1].scene))
     want = sweep_columns(direct)
     row = df.loc[1]
     for name in ("sweep_center_uz_re_um", "sweep_edge_ur_im_um", "sweep_profile_uz_im_um"):
