@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from hapticrom.commands._args import number_in
-from hapticrom.outputs import atomic_dir, check_output_dir
+from hapticrom.outputs import check_dir_output, write_dir
 
 __all__ = ["register"]
 
@@ -44,7 +44,8 @@ def _run(args: argparse.Namespace) -> int:
     if kind != "serial" and not args.out:
         raise ValueError(f"--device {kind} writes files: give --out DIR")
     if args.out:
-        check_output_dir("--out", args.out)
+        check_dir_output("--out", args.out, kind="play", overwrite=args.overwrite,
+                         reads=[args.plan, args.pattern])
     plan = load_plan(args.plan)
     schedule = build_schedule(load_pattern(args.pattern), plan)
     base = SafetyLimits()
@@ -74,10 +75,11 @@ def _run(args: argparse.Namespace) -> int:
         print(f"played on {args.device}; device levels now {max(map(abs, status.levels)):g} "
               "at most")
         return 0
-    with atomic_dir(args.out) as tmp:
+    with write_dir("--out", args.out, kind="play", overwrite=args.overwrite,
+                   reads=[args.plan, args.pattern]) as tmp:
         with open_device(args.device, plan, tmp, limits) as dev:
             dev.play(schedule)
-        names = sorted(p.name for p in tmp.iterdir())
+        names = sorted(p.name for p in tmp.iterdir())  # before the marker is added
     for name in names:
         print(f"wrote {Path(args.out) / name}")
     return 0
@@ -92,7 +94,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--device", required=True, metavar="sim|log|serial:PORT",
                    help="sim: render the skin field; log: write the commands; serial:PORT: "
                    "drive the array")
-    p.add_argument("--out", metavar="DIR", help="output directory (sim, log)")
+    p.add_argument("--out", metavar="DIR", help="output directory (sim, log); an existing one "
+                   "is replaced only with --overwrite and only if play wrote it")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the output of an earlier play in --out")
     p.add_argument("--max-on-ms", type=_positive_ms, metavar="MS",
                    help="longest continuous on-time per channel (default 10000)")
     p.add_argument("--max-duty", type=_fraction, metavar="FRACTION",

@@ -32,7 +32,6 @@ largest trained envelope) stops with :class:`RomBlowUpError` naming the time.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -42,7 +41,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from surrogate.runtime.card import read_card
+from fieldspec.documents import loads_json, read_json_file
+from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
 
 __all__ = [
     "FORMAT",
@@ -390,13 +390,29 @@ def design_grid(model: EnvelopeModel) -> NDArray:
 
 
 def load_envelope_model(path: str | Path) -> EnvelopeModel:
-    """Load a ROM from a ``models/NAME/`` directory (its card names the coefficients file;
-    every file's sha256 is verified, :func:`surrogate.runtime.card.read_card`) or from a
-    coefficients JSON file."""
+    """Load a ROM from a ``models/NAME/`` directory (verified as a whole,
+    :func:`surrogate.runtime.card.verify_model_dir`; its card names the coefficients file) or
+    from a coefficients JSON file. A malformed file is a :class:`ModelFileError` naming it;
+    an unstable model a :class:`RomBlowUpError`."""
     p = Path(path)
     if p.is_dir():
         card = read_card(p)
         if card.get("kind") != "rom":
-            raise ValueError(f"{p}: a {card.get('kind')!r} model, not a transient ROM")
-        p = p / card["coefficients"]
-    return model_from_dict(json.loads(p.read_text()))
+            raise ModelFileError("kind", f"{p / CARD_NAME}: a {card.get('kind')!r} model, not "
+                                 "a transient ROM")
+        name = card["coefficients"]
+        where = p / name
+        text = read_model_file(p, card, name).decode("utf-8", errors="replace")
+        data = loads_json(text, where, ModelFileError)
+    else:
+        where, name = p, p.name
+        data = read_json_file(p, ModelFileError, "ROM coefficients file")
+    if not isinstance(data, Mapping):
+        raise ModelFileError(name, f"{where}: not a JSON object (check: coefficients)")
+    try:
+        return model_from_dict(data)
+    except RomBlowUpError:
+        raise
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
+        raise ModelFileError(name, f"{where}: malformed coefficients (check: coefficients; "
+                             f"{type(err).__name__}: {err})") from None
