@@ -188,9 +188,12 @@ class ExposureMeter:
     def __post_init__(self) -> None:
         self.dose = np.zeros(self.n_sites)
         if self.state_path is not None and Path(self.state_path).exists():
-            state = json.loads(Path(self.state_path).read_text())
-            if state.get("date") == date.today().isoformat() and len(state["dose"]) == \
-                    self.n_sites:
+            from fieldspec import FieldError
+            from fieldspec.documents import read_json_file  # size and nesting limits
+
+            state = read_json_file(self.state_path, FieldError, "exposure file")
+            if isinstance(state, dict) and state.get("date") == date.today().isoformat() \
+                    and len(state["dose"]) == self.n_sites:
                 self.dose = np.asarray(state["dose"], dtype=float)
 
     def a8(self) -> NDArray:

@@ -17,7 +17,6 @@ the step.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -107,13 +106,9 @@ def plan_from_dict(d: Any) -> PlanFile:
 
 
 def load_plan(path: str | Path) -> PlanFile:
-    try:
-        data = json.loads(Path(path).read_text())
-    except OSError as err:
-        raise PlanFileError("<file>", f"cannot read plan {str(path)!r}: {err}") from None
-    except json.JSONDecodeError as err:
-        raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
-    return plan_from_dict(data)
+    from fieldspec.documents import read_json_file  # size and nesting limits
+
+    return plan_from_dict(read_json_file(path, PlanFileError, "plan"))
 
 
 @dataclass(frozen=True)
