@@ -142,8 +142,8 @@ def check_dir_output(option: str, target: str | os.PathLike, *, kind: str, overw
                          f"({what}); only a {kind} directory hapticrom wrote is replaced "
                          "(with --overwrite); choose a new or empty directory")
     if not overwrite:
-        raise FileExistsError(f"{option} {target}: holds an earlier {kind} output; pass "
-                              "--overwrite to replace it")
+        raise FileExistsError(f"{option} {target}: exists and holds an earlier {kind} output; "
+                              "pass --overwrite to replace it")
 
 
 @contextlib.contextmanager

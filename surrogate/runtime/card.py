@@ -95,9 +95,11 @@ def sha256_file(path: Path) -> str:
 
 def _parse_card(root: Path) -> dict[str, Any]:
     card_path = root / CARD_NAME
-    if card_path.is_symlink() or not card_path.is_file():
-        what = "is a symlink" if card_path.is_symlink() else f"has no {CARD_NAME}"
-        raise ModelFileError(CARD_NAME, f"{root}: not a model directory ({what})")
+    if card_path.is_symlink():
+        raise ModelFileError(CARD_NAME, f"{card_path}: a symlink; the card must be a plain "
+                             "file inside the model directory (check: path)")
+    if not card_path.is_file():
+        raise ModelFileError(CARD_NAME, f"{root}: not a model directory (no {CARD_NAME})")
     card = read_json_file(card_path, ModelFileError, "model card")
     if not isinstance(card, dict) or card.get("format") != FORMAT:
         raise ModelFileError(CARD_NAME, f"{card_path}: not a {FORMAT} card (check: format)")

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 
 from fieldspec.documents import loads_json, read_json_file
 from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
+from surrogate.runtime.rom_checks import check_spec, finite
 
 __all__ = [
     "FORMAT",
@@ -358,6 +359,7 @@ def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
     if d.get("format") != FORMAT:
         raise ValueError(f"format: expected {FORMAT!r}, got {d.get('format')!r}")
     spec = dict(d["spec"])
+    check_spec(spec)
     nd = len(spec["design"]) + len(spec.get("interactions", []))
     blocks = []
     for i, blk in enumerate(d["blocks"]):
@@ -367,9 +369,18 @@ def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
             if arr.shape != shape or not np.all(np.isfinite(arr)):
                 raise ValueError(f"blocks[{i}].{key}: need finite values of shape {shape}, "
                                  f"got {arr.shape}")
+        if blk["point"] not in ("center", "edge"):
+            raise ValueError(f"blocks[{i}].point: {blk['point']!r} is not center or edge")
         blocks.append(Block(str(blk["point"]), str(blk["component"]), *arrays))
-    model = EnvelopeModel(tuple(blocks), spec, MotorConstants(**d["motor"]),
-                          float(d["bound_um"]))
+    motor = MotorConstants(**{k: finite(f"motor.{k}", v) for k, v in d["motor"].items()})
+    if not 0 <= motor.start_voltage_V < motor.rated_voltage_V <= motor.max_voltage_V \
+            or motor.rated_frequency_hz <= 0:
+        raise ValueError(f"motor: need 0 <= start < rated <= max voltage and a positive "
+                         f"rated frequency, got {d['motor']}")
+    bound = finite("bound_um", d["bound_um"])
+    if bound <= 0:
+        raise ValueError(f"bound_um: need > 0, got {bound}")
+    model = EnvelopeModel(tuple(blocks), spec, motor, bound)
     rate = model.max_growth_rate(design_grid(model))
     if rate >= 0.0:
         raise RomBlowUpError(f"the model's linear part is unstable: an eigenvalue of A(d) + "
