@@ -116,6 +116,16 @@ def _overlaps(target: Path, reads: Sequence[str | os.PathLike]) -> Path | None:
     return None
 
 
+def check_not_input(option: str, target: str | os.PathLike,
+                    reads: Sequence[str | os.PathLike]) -> None:
+    """Raise ValueError naming ``option`` when the output ``target`` is, contains or lies
+    inside one of the inputs ``reads`` (it would delete or alter what the command reads)."""
+    inside = _overlaps(Path(target), reads)
+    if inside is not None:
+        raise ValueError(f"{option} {target}: overlaps the input {inside} the command reads; "
+                         "refusing (it would be deleted or altered); choose another directory")
+
+
 def check_dir_output(option: str, target: str | os.PathLike, *, kind: str, overwrite: bool,
                      reads: Sequence[str | os.PathLike] = ()) -> None:
     """Raise ValueError (FileExistsError without ``overwrite``) naming ``option``, the path and
@@ -124,10 +134,7 @@ def check_dir_output(option: str, target: str | os.PathLike, *, kind: str, overw
     (:func:`written_kind`). An input being read (``reads``) is never the output, nor inside
     it, nor holds it. Called before any work starts, and again just before the swap."""
     path = Path(target)
-    inside = _overlaps(path, reads)
-    if inside is not None:
-        raise ValueError(f"{option} {target}: overlaps the input {inside} the command reads; "
-                         "refusing (it would be deleted or altered); choose another directory")
+    check_not_input(option, target, reads)
     if path.is_symlink() or (path.exists() and not path.is_dir()):
         raise ValueError(f"{option} {target}: exists and is not a directory; refusing to "
                          "replace it")

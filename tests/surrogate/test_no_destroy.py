@@ -75,3 +75,11 @@ def test_write_model_replaces_only_its_own_directory(tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()
     write_model(empty, card, {"c.json": b"{}"})  # an empty directory is fine
+
+
+def test_merge_never_writes_into_an_input(synthetic_dataset, capsys):
+    before = tree(synthetic_dataset)
+    assert main(["dataset", "merge", "--out", str(synthetic_dataset / "merged"),
+                 str(synthetic_dataset)]) == 2
+    assert "overlaps the input" in capsys.readouterr().err
+    assert tree(synthetic_dataset) == before and not (synthetic_dataset / "merged").exists()
