@@ -15,6 +15,7 @@ the unknown count is the reliable part and the limit is stated in it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from . import haptic_unit
@@ -302,17 +303,41 @@ def _driver(scene: Scene, est: CostEstimate, limit: float) -> tuple[str, str]:
             + (f"use {f_field} >= {higher:g}, " if higher else "")
             + 'or make the absorbing boundaries fixed (tissue.side = "fixed", '
             'tissue.base = "fixed")')
+    far = _walk(scene, limit, lambda v: replace(scene, mesh=replace(m, far_size_mm=v)),
+                m.far_size_mm * shrink, 1.1)
+    far_text = f"mesh.far_size_mm >= {far:.3g}" if far else "a coarser mesh.far_size_mm"
     if tissue_r >= tissue_z:
         if est.near_r > 0.5 * tissue_r:
-            return "mesh.near_size_mm", (f"use mesh.near_size_mm >= "
-                                         f"{m.near_size_mm * ratio:.3g}")
-        return "tissue.radius_mm", (f"use tissue.radius_mm <= {t.radius_mm / ratio:.3g} or "
-                                    f"mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+            near = _walk(scene, limit, lambda v: replace(scene, mesh=replace(
+                m, near_size_mm=v, far_size_mm=max(v, m.far_size_mm))),
+                m.near_size_mm * ratio, 1.1)
+            return "mesh.near_size_mm", (
+                f"use mesh.near_size_mm >= {near or m.near_size_mm * ratio:.3g}"
+                + (" (and mesh.far_size_mm at least as large)"
+                   if near and near > m.far_size_mm else ""))
+        radius = _walk(scene, limit, lambda v: replace(scene, tissue=replace(t, radius_mm=v)),
+                       t.radius_mm / ratio, 0.9)
+        return "tissue.radius_mm", (f"use tissue.radius_mm <= "
+                                    f"{radius or t.radius_mm / ratio:.3g} or {far_text}")
     thickest = max(range(len(t.layers)), key=lambda i: t.layers[i].thickness_mm)
     return f"tissue.layer[{thickest}].thickness_mm", (
         f"the tissue is {t.depth_mm:g} mm deep; use a thinner "
         f"tissue.layer[{thickest}].thickness_mm (the total <= {t.depth_mm / ratio:.3g} mm) "
-        f"or mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+        f"or {far_text}")
+
+
+def _walk(scene: Scene, limit: float, build: Callable[[float], Scene], start: float,
+          factor: float) -> float | None:
+    """The first of start * factor^k (k = 0..40, three significant digits) whose scene
+    ``build(value)`` fits the limit; None when none does (or the scene cannot be built)."""
+    for k in range(41):
+        value = float(f"{start * factor**k:.3g}")
+        try:
+            if value > 0 and _fits(build(value), limit):
+                return value
+        except (ValueError, TypeError, ArithmeticError):
+            return None
+    return None
 
 
 def _material_field(scene: Scene, name: str) -> str:
