@@ -26,7 +26,7 @@ demo: $(STAMP)
 	$(BIN)/hapticrom predict models/nn-default --csv examples/designs.csv --json out/designs-nn.json
 	$(BIN)/python examples/surrogate_vs_fe.py
 	$(BIN)/hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
-	$(BIN)/hapticrom play out/plan.json examples/pattern-sweep.toml --device sim --out out/play
+	$(BIN)/hapticrom play out/plan.json examples/pattern-sweep.toml --device sim --out out/play --overwrite
 
 test: $(STAMP)
 	$(BIN)/ruff check .

@@ -83,3 +83,17 @@ def test_merge_never_writes_into_an_input(synthetic_dataset, capsys):
                  str(synthetic_dataset)]) == 2
     assert "overlaps the input" in capsys.readouterr().err
     assert tree(synthetic_dataset) == before and not (synthetic_dataset / "merged").exists()
+
+
+def test_the_library_refuses_before_training(synthetic_dataset, tmp_path):
+    from surrogate.rom import train as train_rom
+    from surrogate.train import train as train_surrogate
+
+    user = tmp_path / "user"
+    user.mkdir()
+    (user / "notes.txt").write_text("x")
+    with pytest.raises(ValueError, match=r"notes\.txt"):
+        train_surrogate([synthetic_dataset], "gp", user, overwrite=True)
+    with pytest.raises(ValueError, match=r"notes\.txt"):
+        train_rom([synthetic_dataset], user, overwrite=True)
+    assert (user / "notes.txt").read_text() == "x"
