@@ -8,16 +8,18 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 __all__ = ["register"]
 
 
 def _options(text: str | None) -> dict:
+    from fieldspec import FieldError
+    from fieldspec.documents import loads_json  # nesting limits
+
     try:
-        options = json.loads(text) if text else {}
-    except json.JSONDecodeError as err:
-        raise ValueError(f"--options {text!r}: not JSON ({err.msg})") from None
+        options = loads_json(text, "--options", FieldError) if text else {}
+    except FieldError as err:
+        raise ValueError(f"--options {text[:80]!r}: not JSON within the limits ({err})") from None
     if not isinstance(options, dict):
         raise ValueError(f"--options {text!r}: expected a JSON object")
     return options

@@ -76,3 +76,12 @@ def test_every_command_refuses_a_deep_document_with_exit_2(tmp_path, capsys, com
     err = capsys.readouterr().err
     assert "nested deeper than the limit" in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["deep.toml"]
+
+
+def test_train_options_nested_deep_are_refused(tmp_path, capsys):
+    """Before: RecursionError, exit 1."""
+    deep = "[" * 5000 + "]" * 5000
+    assert main(["train", "--data", str(tmp_path), "--kind", "gp", "--out",
+                 str(tmp_path / "m"), "--options", deep]) == 2
+    err = capsys.readouterr().err
+    assert "--options" in err and "nested deeper" in err and "Traceback" not in err
