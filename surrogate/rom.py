@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from surrogate.registry import package_versions, write_model
+from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
@@ -391,8 +391,7 @@ def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-
     the held-out rows, register ``out`` (card.json + coefficients.json, written atomically
     by :func:`surrogate.registry.write_model`); returns the card."""
     out = Path(out)
-    if out.exists() and not overwrite:
-        raise FileExistsError(f"{out} exists (pass overwrite / --overwrite to replace it)")
+    check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if not 0 < threshold < 1:
         raise ValueError(f"threshold = {threshold!r}: allowed (0, 1)")
     runs, motor, hashes = load_runs(data)

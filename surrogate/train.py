@@ -22,7 +22,12 @@ import numpy as np
 
 from surrogate.features import codes_from_frame, input_specs
 from surrogate.pod import ProfileTargets, output_columns
-from surrogate.registry import manifest_sha256, package_versions, write_model
+from surrogate.registry import (
+    check_model_out,
+    manifest_sha256,
+    package_versions,
+    write_model,
+)
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import Predictor, make_session
 
@@ -201,8 +206,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     """Train a ``kind`` ("gp" or "nn") model on ``paths``, write ``out``; return its card."""
     if kind not in KINDS:
         raise ValueError(f"--kind {kind!r}: allowed {', '.join(KINDS)}")
-    if Path(out).exists() and not overwrite:
-        raise FileExistsError(f"{out} exists (pass --overwrite to replace it)")
+    check_model_out(out, overwrite)  # before the work: the output may not be replaced
     data = load_datasets(paths, categorical=categorical)
     tr, te = split(len(data.codes), test_fraction, seed)
     X = encode(data.codes, data.specs)

@@ -104,8 +104,10 @@ def run_validate(args: argparse.Namespace) -> int:
 
 def run_merge(args: argparse.Namespace) -> int:
     """Merge the inputs into a new dataset."""
+    from hapticrom.outputs import check_not_input
     from surrogate.data.inspect import merge_datasets
 
+    check_not_input("--out", args.out, args.inputs)
     res = merge_datasets(args.out, args.inputs, args.allow_mixed_solvers)
     print(f"{args.out}: {res['rows_out']} rows from {res['rows_in']} "
           f"({res['duplicates_dropped']} duplicates dropped), {res['parts']} parts")

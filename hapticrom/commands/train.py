@@ -8,16 +8,18 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 __all__ = ["register"]
 
 
 def _options(text: str | None) -> dict:
+    from fieldspec import FieldError
+    from fieldspec.documents import loads_json  # nesting limits
+
     try:
-        options = json.loads(text) if text else {}
-    except json.JSONDecodeError as err:
-        raise ValueError(f"--options {text!r}: not JSON ({err.msg})") from None
+        options = loads_json(text, "--options", FieldError) if text else {}
+    except FieldError as err:
+        raise ValueError(f"--options {text[:80]!r}: not JSON within the limits ({err})") from None
     if not isinstance(options, dict):
         raise ValueError(f"--options {text!r}: expected a JSON object")
     return options
@@ -39,7 +41,11 @@ def _run_rom(args: argparse.Namespace, options: dict) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from hapticrom.outputs import check_dir_output
+
     options = _options(args.options)
+    check_dir_output("--out", args.out, kind="model", overwrite=args.overwrite,
+                     reads=args.data)
     if args.kind == "rom":
         return _run_rom(args, options)
     from surrogate.train import train
@@ -65,7 +71,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--kind", required=True, choices=("gp", "nn", "rom"),
                    help="model kind: gp, nn (harmonic amplitudes), rom (transient envelope)")
     p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing model")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing model directory (only one hapticrom wrote; never "
+                   "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")

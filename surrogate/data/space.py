@@ -60,7 +60,6 @@ import copy
 import functools
 import hashlib
 import json
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -320,9 +319,11 @@ def _read_base(d: Mapping[str, Any], head: Mapping[str, Any],
     path = Path(head["base_scene"])
     if not path.is_absolute():
         path = Path(base_dir or ".") / path
+    from fieldspec.documents import read_toml_file
+
     try:
-        scene = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except (OSError, tomllib.TOMLDecodeError) as err:
+        scene = read_toml_file(path, SpaceError, "base scene")
+    except SpaceError as err:
         raise SpaceError("space.base_scene", f"space.base_scene = {str(path)!r}: cannot read "
                          f"it: {err}") from None
     return deep_merge(scene, base)
@@ -402,13 +403,8 @@ def _changes(space: Space, row: Mapping[str, Any], h: str, p: Parameter, alt: np
 
 def load_space(path: str | Path, check_scenes: bool = True) -> Space:
     """Read a space TOML file (see module docstring). Raises :class:`SpaceError`."""
+    from fieldspec.documents import read_toml_file
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as err:
-        raise SpaceError("<file>", f"cannot read space file {str(path)!r}: {err}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpaceError("<file>", f"{path}: invalid TOML: {err}") from None
+    data = read_toml_file(path, SpaceError, "space file")
     return space_from_dict(data, base_dir=path.parent, check_scenes=check_scenes)

@@ -168,12 +168,12 @@ class Store:
         if not mpath.is_file():
             raise DatasetError(str(path), f"{path} is not a hapticrom dataset "
                                f"(no {MANIFEST_NAME})")
-        try:
-            data = json.loads(mpath.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as err:
-            raise DatasetError(str(mpath), f"cannot read {mpath}: {err}") from None
-        if data.get("format") != FORMAT:
-            raise DatasetError(str(mpath), f"{mpath}: format {data.get('format')!r} is not "
+        from fieldspec.documents import read_json_file
+
+        data = read_json_file(mpath, DatasetError, "dataset manifest")
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise DatasetError(str(mpath), f"{mpath}: format "
+                               f"{data.get('format') if isinstance(data, dict) else data!r} is not "
                                f"{FORMAT!r}")
         if data.get("schema_version") != SCHEMA_VERSION:
             raise DatasetError(str(mpath), f"{mpath}: schema_version "
