@@ -14,20 +14,46 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import figstyle
 
-def check_output_file(option: str, target: str | os.PathLike) -> None:
+
+def check_output_file(option: str, target: str | os.PathLike, overwrite: bool = False) -> None:
     """Raise ValueError naming ``option`` unless ``target`` can be written as a file: its
-    directory exists and it is not itself a directory. Called before any work starts."""
+    directory exists, it is not itself a directory, and an existing file there is one
+    hapticrom wrote (:func:`written_file`) or ``overwrite`` says to replace it. Called before
+    any work starts."""
     path = Path(target)
     if path.is_dir():
         raise ValueError(f"{option} {target}: is a directory; give a file name")
     if not path.resolve().parent.is_dir():
         raise ValueError(f"{option} {target}: the directory {path.parent} does not exist")
+    if (path.exists() or path.is_symlink()) and not overwrite and not written_file(path):
+        raise ValueError(f"{option} {target}: exists and hapticrom did not write it "
+                         f"({path.stat().st_size if path.exists() else 0} bytes); refusing to "
+                         "replace it: choose another name, or pass --overwrite")
+
+
+def written_file(path: str | os.PathLike) -> bool:
+    """Whether hapticrom wrote the file ``path``: a JSON document whose ``kind`` starts with
+    ``hapticrom.`` (every document it writes), a PNG carrying figstyle's ``Software`` text
+    chunk, a VTK file naming hapticrom's fields (``magnitude_um``). Anything else is the
+    user's."""
+    path = Path(path)
+    if not path.is_file() or path.is_symlink():
+        return False
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 16)
+    if head.startswith(b"\x89PNG"):
+        return b"Software\x00" + figstyle.SOFTWARE.encode() in head
+    if head.lstrip().startswith(b"{"):  # the kind is among the first keys of every document
+        return re.search(rb'"kind"\s*:\s*"hapticrom\.', head) is not None
+    return b"<VTKFile" in head[:4096] and b'Name="magnitude_um"' in head
 
 
 def _file_mode() -> int:

@@ -58,7 +58,7 @@ def _run(args: argparse.Namespace) -> int:
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
-            check_output_file(f"--{opt}", getattr(args, opt))
+            check_output_file(f"--{opt}", getattr(args, opt), args.overwrite)
     measurement = read_measurement(args.measurement)
     predictor = load_predictor(args.model)
     fit = [n.strip() for n in args.fit.split(",") if n.strip()]
@@ -210,4 +210,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", metavar="PNG", help="write the figure")
     p.add_argument("--verify", action="store_true",
                    help="re-solve the posterior mean with the FE solver and compare")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     p.set_defaults(func=_run)

@@ -125,7 +125,7 @@ def _run(args: argparse.Namespace) -> int:
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
-            check_output_file(f"--{opt}", getattr(args, opt))
+            check_output_file(f"--{opt}", getattr(args, opt), args.overwrite)
     req, tissue = load_layout(args.layout), None
     if args.tissue:
         from planner.tissue import apply_tissue, load_tissue
@@ -312,4 +312,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tissue", metavar="CALIBRATION",
                    help="plan for a person: the tissue of a `hapticrom calibrate` document, its "
                    "posterior uncertainty carried into the pitch (planner.tissue)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     p.set_defaults(func=_run)
