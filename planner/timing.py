@@ -21,7 +21,7 @@ speed)`` of the same shape (the tests use a first-order system with a known time
 
 Times are found on a uniform grid of ``dt_s`` (linear interpolation between samples).
 The drive voltage that spins the ERM at the plan's frequency is the inverse of its
-steady-speed law (``MotorConstants``: 120 rev/s at 3.3 V, stiction below 0.4 V, at most
+steady-speed law (:mod:`motorlaw`: 120 rev/s at 3.3 V, stiction below 0.4 V, at most
 4.5 V); a frequency that needs more than the limit has no timing (:class:`TimingError`).
 """
 
@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+import motorlaw
 
 __all__ = ["TIMING_KEYS", "Timing", "TimingError", "envelope_timing", "plan_timing",
            "rom_response", "voltage_for_frequency"]
@@ -77,11 +79,12 @@ class Timing:
 
 
 def voltage_for_frequency(motor: Any, frequency_hz: float) -> float:
-    """Steady drive voltage [V] spinning the ERM (``MotorConstants``) at ``frequency_hz``."""
-    per_hz = (motor.rated_voltage_V - motor.start_voltage_V) / motor.rated_frequency_hz
-    v = motor.start_voltage_V + frequency_hz * per_hz
+    """Steady drive voltage [V] spinning the ERM (a :class:`motorlaw.SpeedLaw`) at
+    ``frequency_hz``: the inverse of the one speed law (:func:`motorlaw.voltage_for_frequency`),
+    refused above the motor's voltage limit."""
+    v = motorlaw.voltage_for_frequency(motor, frequency_hz)
     if v > motor.max_voltage_V:
-        top = (motor.max_voltage_V - motor.start_voltage_V) / per_hz
+        top = motorlaw.max_frequency_hz(motor)
         raise TimingError("frequency_hz", f"{frequency_hz:g} Hz needs {v:.2f} V, above the "
                           f"motor's {motor.max_voltage_V:g} V limit (at most {top:.0f} Hz)")
     return v

@@ -39,13 +39,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motorlaw import SpeedLaw
 from surrogate.registry import package_versions, write_model
 from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
     STATES,
     EnvelopeModel,
-    MotorConstants,
     design_features,
     design_grid,
     model_from_dict,
@@ -124,7 +124,7 @@ def _schedule_volts(t: NDArray, schedule_ms: Sequence[Sequence[float]]) -> NDArr
 
 
 def _speed_and_phase(t: NDArray, schedule_ms: Sequence[Sequence[float]], tau_up_s: float,
-                     tau_down_s: float, motor: MotorConstants) -> tuple[NDArray, NDArray]:
+                     tau_down_s: float, motor: SpeedLaw) -> tuple[NDArray, NDArray]:
     """Motor speed (rad/s) and rotor angle (rad) at times ``t``: the speed law on a 10x finer
     grid that holds the schedule's switch times exactly, the angle by the trapezoidal rule."""
     switches = np.array([s[0] for s in schedule_ms]) * 1e-3
@@ -135,13 +135,13 @@ def _speed_and_phase(t: NDArray, schedule_ms: Sequence[Sequence[float]], tau_up_
     return np.interp(t, fine, omega), np.interp(t, fine, phi)
 
 
-def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], MotorConstants, list[str]]:
+def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], SpeedLaw, list[str]]:
     """Successful transient unit runs of the datasets, their common motor law, and the
     sha256 of each dataset's manifest. Raises ValueError if a dataset holds no such run."""
     import pandas as pd
 
     runs: list[Run] = []
-    motor: MotorConstants | None = None
+    motor: SpeedLaw | None = None
     hashes = []
     for path in paths:
         manifest = Path(path) / "_manifest.json"
@@ -165,13 +165,14 @@ def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], MotorConstants, l
     return runs, motor, hashes
 
 
-def _run_from_row(row: Mapping[str, Any]) -> tuple[Run, MotorConstants]:
+def _run_from_row(row: Mapping[str, Any]) -> tuple[Run, SpeedLaw]:
     scene = json.loads(row["scene_json"])
     m = scene["unit"]["motor"]
     schedule = scene["analysis"]["voltage_schedule"]
-    motor = MotorConstants(float(m["rated_voltage_V"]), float(m["rated_frequency_hz"]),
-                           float(m["start_voltage_V"]),
-                           max(4.5, max(abs(v) for _, v in schedule)))  # as fem.time_domain
+    motor = SpeedLaw(rated_voltage_V=float(m["rated_voltage_V"]),
+                     rated_frequency_hz=float(m["rated_frequency_hz"]),
+                     start_voltage_V=float(m["start_voltage_V"]),
+                     max_voltage_V=max(4.5, max(abs(v) for _, v in schedule)))
     t = np.asarray(row["history_t_s"], dtype=float)
     design = {"skin_E_kPa": float(scene["tissue"]["layer"][0]["E_kPa"]),
               "fat_thickness_mm": float(scene["tissue"]["layer"][1]["thickness_mm"]),
@@ -244,7 +245,7 @@ def _modelled_components(runs: Sequence[Run]) -> list[tuple[str, int]]:
     return out
 
 
-def fit_envelope_model(runs: Sequence[Run], motor: MotorConstants, *, threshold: float = 1e-3,
+def fit_envelope_model(runs: Sequence[Run], motor: SpeedLaw, *, threshold: float = 1e-3,
                        n_models: int = 20, seed: int = 0) -> tuple[dict[str, Any], list[str]]:
     """Sparse identification of every complex envelope; returns the coefficients dict
     (``surrogate.runtime.rom`` format) and the identified equations as text.

@@ -5,12 +5,9 @@ coefficients that ``surrogate.rom`` identified from transient FE runs and integr
 
 Model (SI inside; um and ms only in names at the edges):
 
-- Motor speed omega(t), rad/s, from the drive voltage with the ERM's first-order dynamics:
-  target speed ``omega_T(V) = sign(V) k_v max(|V| - V_start, 0)`` (k_v from the rated voltage
-  and frequency), ``d omega/dt = (omega_T - omega) / tau`` with ``tau = tau_spinup`` while
-  ``|omega_T| > omega`` and ``tau_spindown`` otherwise, omega clamped at >= 0 (reverse drive
-  brakes, never spins the motor backwards). The voltage is held constant between the given
-  samples and every step is integrated exactly.
+- Motor speed omega(t), rad/s, from the drive voltage by the one ERM law of :mod:`motorlaw`
+  (the solver's): the voltage is held constant between the given samples and the law is
+  solved exactly.
 - Complex envelopes: every displacement component c of a point (u_r, u_theta at the center;
   u_r, u_z, u_theta at the edge) is u_c(t) = Re(z_c(t) e^{i phi(t)}), phi the rotor angle, and
   the point's envelope is sqrt(sum_c |z_c|^2) (in steady running the harmonic magnitude
@@ -35,19 +32,19 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from motorlaw import SpeedLaw, held_speed_and_phase
 from surrogate.runtime.card import read_card
 
 __all__ = [
     "FORMAT",
     "EnvelopeModel",
-    "MotorConstants",
     "RomBlowUpError",
     "RomInputError",
     "design_features",
@@ -75,42 +72,13 @@ class RomInputError(ValueError):
 # --------------------------------------------------------------------------- motor speed
 
 
-@dataclass(frozen=True)
-class MotorConstants:
-    """Steady-speed law of the ERM (the defaults of ``fem.motor.ERMMotor``: 120 rev/s at
-    3.3 V, rotor stiction below 0.4 V, at most 4.5 V)."""
-
-    rated_voltage_V: float = 3.3
-    rated_frequency_hz: float = 120.0
-    start_voltage_V: float = 0.4
-    max_voltage_V: float = 4.5
-
-    @property
-    def rated_omega(self) -> float:
-        """Rated speed, rad/s."""
-        return 2.0 * math.pi * self.rated_frequency_hz
-
-    def target_omega(self, volts: NDArray) -> NDArray:
-        """Signed speed the motor is driven towards, rad/s (negative: braking)."""
-        per_volt = self.rated_omega / (self.rated_voltage_V - self.start_voltage_V)
-        return np.sign(volts) * per_volt * np.maximum(np.abs(volts) - self.start_voltage_V, 0.0)
-
-
 def motor_speed(t_s: NDArray, volts: NDArray, tau_up_s: float, tau_down_s: float,
-                motor: MotorConstants) -> NDArray:
+                motor: SpeedLaw) -> NDArray:
     """Speed omega (rad/s) at the times ``t_s`` (s) for voltage ``volts[k]`` held on
-    [t_k, t_k+1), from rest at t_0; each step exact (tau chosen at the step's start; a
-    braking step that would cross zero stops at rest)."""
-    h = np.diff(t_s)
-    steps = zip(motor.target_omega(volts[:-1]).tolist(), np.exp(-h / tau_up_s).tolist(),
-                np.exp(-h / tau_down_s).tolist(), strict=True)
-    omega = [0.0]
-    w = 0.0
-    for tgt, decay_up, decay_down in steps:  # a scalar recurrence on Python floats
-        decay = decay_up if abs(tgt) > w else decay_down
-        w = max(tgt + (w - tgt) * decay, 0.0) if (w > 0.0 or tgt > 0.0) else 0.0
-        omega.append(w)
-    return np.array(omega)
+    [t_k, t_k+1), from rest at t_0: the one ERM law (:mod:`motorlaw`, exact) with these time
+    constants."""
+    law = replace(motor, tau_spinup_s=tau_up_s, tau_spindown_s=tau_down_s)
+    return held_speed_and_phase(law, t_s, volts)[0]
 
 
 # --------------------------------------------------------------------------- features
@@ -193,7 +161,7 @@ class EnvelopeModel:
 
     blocks: tuple[Block, ...]
     spec: dict[str, Any]
-    motor: MotorConstants
+    motor: SpeedLaw
     bound_um: float
 
     @property
@@ -368,7 +336,7 @@ def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
                 raise ValueError(f"blocks[{i}].{key}: need finite values of shape {shape}, "
                                  f"got {arr.shape}")
         blocks.append(Block(str(blk["point"]), str(blk["component"]), *arrays))
-    model = EnvelopeModel(tuple(blocks), spec, MotorConstants(**d["motor"]),
+    model = EnvelopeModel(tuple(blocks), spec, SpeedLaw(**d["motor"]),
                           float(d["bound_um"]))
     rate = model.max_growth_rate(design_grid(model))
     if rate >= 0.0:

@@ -15,7 +15,8 @@ from planner.timing import (
     rom_response,
     voltage_for_frequency,
 )
-from surrogate.runtime.rom import MotorConstants, load_envelope_model
+from motorlaw import SpeedLaw
+from surrogate.runtime.rom import load_envelope_model
 
 ROOT = Path(__file__).resolve().parents[2]
 TAU, GAIN, V_NOM, V_MAX, DT = 0.02, 2.0, 3.0, 4.5, 2.5e-4  # s, um/V, V, V, s
@@ -74,7 +75,7 @@ def test_without_headroom_there_is_no_overdrive():
 
 
 def test_voltage_for_frequency_inverts_the_motor_law_and_refuses_beyond_the_limit():
-    m = MotorConstants()
+    m = SpeedLaw()
     v = voltage_for_frequency(m, 100.0)
     assert m.target_omega(np.array([v]))[0] == pytest.approx(2 * math.pi * 100.0)
     assert voltage_for_frequency(m, 120.0) == pytest.approx(3.3)

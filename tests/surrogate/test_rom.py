@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from motorlaw import SpeedLaw
 from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
-    MotorConstants,
     RomBlowUpError,
     RomInputError,
     _expm,
@@ -28,7 +28,7 @@ from surrogate.runtime.rom import (
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "models" / "rom-default"
 DATASET = ROOT / "datasets" / "transient"
-MOTOR = MotorConstants()
+MOTOR = SpeedLaw()
 DESIGN = {"skin_E_kPa": 49.0, "fat_thickness_mm": 10.0, "orientation": "reverse",
           "attachment": "pogo", "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
 
