@@ -193,11 +193,12 @@ def rom_response(model: Any, design: Mapping[str, Any], *, extrapolate: bool = F
 def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4) -> dict[str, Any]:
     """The ``timing`` object of a plan: :class:`Timing` of the chosen unit (``best``, a
     :class:`planner.optimise.DesignResult`) on the request's ROM, at the voltage that spins
-    the motor at the plan's frequency. The ROM's inputs are taken from the site and design
-    (skin, fat, orientation, attachment) and the request's motor time constants; it has no
-    ring inputs (its training units all carry the paper's three rings), so ring designs share
-    its timing. When the timing cannot be computed, every key is null and ``unavailable``
-    says why."""
+    the motor at the plan's frequency. The model's inputs are taken from the site and design
+    (every input of the harmonic model) and the request's motor time constants. The model's
+    inputs (``design``) and the motor's reach at its voltage limit
+    (``max_frequency_hz``) are recorded. When the timing cannot be computed (a frequency
+    above that reach, a design outside the model), every key is null and ``unavailable``
+    says why, with the number."""
     from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
 
     spec = request.timing
@@ -217,6 +218,8 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4) -> dict[str, Any
         missing = [k for k in model.input_names if k not in design]
         if missing:
             raise TimingError(missing[0], f"the ROM needs {missing[0]!r} (site or design)")
+        extra["design"] = design
+        extra["max_frequency_hz"] = round(motorlaw.max_frequency_hz(model.motor), 4)
         nominal = voltage_for_frequency(model.motor, best.frequency_hz)
         timing = envelope_timing(rom_response(model, design,
                                               extrapolate=request.allow_extrapolation),

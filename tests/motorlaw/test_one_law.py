@@ -4,7 +4,6 @@ defaults (identity, not only equal numbers)."""
 from __future__ import annotations
 
 import ast
-import math
 from pathlib import Path
 
 import numpy as np
