@@ -28,9 +28,10 @@ def _options(text: str | None) -> dict:
 def _run_rom(args: argparse.Namespace, options: dict) -> int:
     from surrogate.rom import train
 
-    unknown = sorted(set(options) - {"threshold"})
+    unknown = sorted(set(options) - {"harmonic", "max_nfev"})
     if unknown:
-        raise ValueError(f"--options: {unknown[0]!r} is not a rom option (allowed: threshold)")
+        raise ValueError(f"--options: {unknown[0]!r} is not a rom option (allowed: harmonic, "
+                         "max_nfev)")
     card = train(args.data, args.out, seed=args.seed, overwrite=args.overwrite, **options)
     held = card["metrics"]["held_out"]["summary"]
     print(f"identified rom on {card['split']['n_train']} runs, held out "
