@@ -19,6 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from surrogate import kinds
+from surrogate.pod import ProfileTargets
+
 from .designs import StudyData
 from .metric import Answer, answer_from_log, errors, summary
 
@@ -47,27 +50,22 @@ class Fitted:
 
 
 def fit(kind: str, sd: StudyData, n: int, options: dict[str, Any] | None = None) -> Fitted:
-    """Train ``kind`` ("gp" or "nn", the defaults of ``hapticrom train``) on the first ``n``
-    training rows; time the fit (targets included) [s]."""
-    from surrogate.gp import GPSurrogateRegressor
-    from surrogate.nn import MLPEnsembleRegressor
-    from surrogate.pod import ProfileTargets
-    from surrogate.train import GP_POD_MODES
-
+    """Train ``kind`` (a steady-state kind of :mod:`surrogate.kinds`, with the defaults of
+    ``hapticrom train``) on the first ``n`` training rows; time the fit (targets included) [s].
+    An estimator that subsamples (``max_train``) is told to use all ``n`` rows."""
+    spec = kinds.get(kind, "kind", steady=True)
     if not 2 <= n <= sd.train.size:
         raise ValueError(f"n = {n}: allowed 2..{sd.train.size} training rows")
     rows = sd.train[:n]
     d = sd.data
     t0 = time.perf_counter()
-    targets = ProfileTargets(n_modes=GP_POD_MODES if kind == "gp" else None)
+    targets = ProfileTargets(n_modes=spec.pod_modes)
     T = targets.fit_transform(d.center_um[rows], d.profile_um[rows])
-    opts = dict(options or {})
-    if kind == "gp":
-        est = GPSurrogateRegressor(random_state=0, max_train=max(n, 2), **opts).fit(sd.X[rows], T)
-    elif kind == "nn":
-        est = MLPEnsembleRegressor(random_state=0, **opts).fit(sd.X[rows], T)
-    else:
-        raise ValueError(f"kind = {kind!r}: allowed gp, nn")
+    assert spec.estimator is not None
+    est = spec.estimator(random_state=0, **dict(options or {}))
+    if "max_train" in est.get_params():
+        est.set_params(max_train=max(n, 2))
+    est.fit(sd.X[rows], T)
     B, b = targets.output_map()
     return Fitted(kind, est, B, b, n, time.perf_counter() - t0)
 
