@@ -5,12 +5,19 @@
     python bench/bench_generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
     python bench/bench_generate.py --n 256 --compare --repeats 2   # topology grouping on/off
     python bench/bench_generate.py --n 256 --mesh-topology per_design   # one mesh per design
+    python bench/bench_generate.py --sweep-space --workers 2             # sweeps side by side
 
 Each run generates ``--n`` samples of the space into a fresh temporary dataset through the
 public ``surrogate.data.generate.generate`` (process pool, Parquet parts, manifest: the real path).
 Reported per worker count: wall time of the run (worker start-up included), samples per
 minute, the mean solver time per sample (``wall_s`` column) and the parallel efficiency
 rate(w) / (w * rate(1)). No assertions: numbers go into the README.
+
+``--sweep-space [TOML]`` (default ``datasets/spaces/default-sweep.toml``) runs, per worker
+count, the single-frequency space and the sweep space (``--sweep-n`` designs, default
+``--n``) one after the other and reports both in design-frequency answers per minute: a
+single-frequency sample is one answer, a sweep design is one answer per frequency of its band.
+The sweep rows also give the mean full solves per design and the largest error estimate.
 
 ``--compare`` runs every worker count with the dispatch grouped by mesh topology
 (``surrogate.data.generate.GROUP_BY_TOPOLOGY``) and in plan order, alternately, ``--repeats``
@@ -74,10 +81,9 @@ def counting_run_chunk(payload: str) -> str:
 
 def _run(space, n: int, workers: int, grouped: bool) -> dict:
     """One generate run into a fresh dataset: wall [s], rate, mean solve time, map counts."""
-    import pandas as pd
-
     import surrogate.data.backends as backends
     import surrogate.data.generate as gen
+    from surrogate.data.store import Store
 
     with tempfile.TemporaryDirectory() as tmp:
         counts = Path(tmp) / "counts"
@@ -91,7 +97,7 @@ def _run(space, n: int, workers: int, grouped: bool) -> dict:
             wall = time.perf_counter() - t0
         finally:
             gen.GROUP_BY_TOPOLOGY, backends.run_chunk = saved
-        df = pd.read_parquet(Path(tmp) / "ds")
+        df = Store.open(Path(tmp) / "ds").read()
         built = [int(x) for f in counts.iterdir() for x in f.read_text().split()]
     return {"wall": wall, "rate": 60.0 * n / wall, "solve": float(df["wall_s"].mean()),
             "failed": rep.new_failed, "maps": sum(built),
@@ -155,11 +161,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--repeats", type=int, default=2, help="runs per variant with --compare")
     p.add_argument("--mesh-topology", choices=("per_sample", "per_design"), default=None,
                    help="override the space's mesh_topology (surrogate.data.mesh_plan)")
+    p.add_argument("--sweep-space", type=Path, nargs="?", default=None,
+                   const=ROOT / "datasets" / "spaces" / "default-sweep.toml",
+                   help="also generate this sweep space and compare answers per minute")
+    p.add_argument("--sweep-n", type=int, default=None,
+                   help="designs per sweep run (default --n)")
     args = p.parse_args(argv)
 
-    import pandas as pd
-
-    from surrogate.data.generate import generate, plan_samples
+    from surrogate.data.generate import plan_samples
 
     space = _space(args.space, args.coarse, args.mesh_topology)
     t0 = time.perf_counter()
@@ -176,22 +185,62 @@ def main(argv: list[str] | None = None) -> int:
     if args.compare:
         compare(space, args.n, args.workers, args.repeats)
         return 0
+    if args.sweep_space is not None:
+        sweeps(space, _space(args.sweep_space, args.coarse, args.mesh_topology), args.n,
+               args.sweep_n or args.n, args.workers)
+        return 0
     print(f"{'workers':>7} {'samples':>7} {'wall_s':>8} {'samples/min':>12} "
           f"{'solve_s/sample':>15} {'dofs':>7} {'failed':>6} {'efficiency':>10}")
     base_rate = None
     for w in args.workers:
-        with tempfile.TemporaryDirectory() as tmp:
-            out = Path(tmp) / "ds"
-            t0 = time.perf_counter()
-            rep = generate(space, args.n, out, workers=w, progress=False)
-            wall = time.perf_counter() - t0
-            df = pd.read_parquet(out)
-        rate = 60.0 * args.n / wall
+        run = _generate(space, args.n, w)
+        df, rate = run["df"], run["rate"]
         base_rate = base_rate or rate / w
-        print(f"{w:>7} {args.n:>7} {wall:>8.2f} {rate:>12.1f} {df['wall_s'].mean():>15.3f} "
+        print(f"{w:>7} {args.n:>7} {run['wall']:>8.2f} {rate:>12.1f} "
+              f"{df['wall_s'].mean():>15.3f} "
               f"{int(df['dofs'].median()) if df['dofs'].notna().any() else 0:>7} "
-              f"{rep.new_failed:>6} {rate / (w * base_rate):>10.2f}")
+              f"{run['failed']:>6} {rate / (w * base_rate):>10.2f}")
     return 0
+
+
+def _generate(space, n: int, workers: int) -> dict:
+    """One generate run into a fresh temporary dataset: wall [s], rows, samples/min."""
+    from surrogate.data.generate import generate
+    from surrogate.data.store import Store
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "ds"
+        t0 = time.perf_counter()
+        rep = generate(space, n, out, workers=workers, progress=False)
+        wall = time.perf_counter() - t0
+        df = Store.open(out).read()
+        size = sum(p.stat().st_size for p in Store.open(out).parts())
+    return {"wall": wall, "rate": 60.0 * n / wall, "df": df, "failed": rep.new_failed,
+            "bytes_per_row": size / max(len(df), 1)}
+
+
+def sweeps(single, sweep, n: int, n_sweep: int, workers: list[int]) -> None:
+    """Single-frequency and sweep generation side by side, in answers per minute."""
+
+    n_f = len(sweep.band.frequencies_hz)
+    print(f"# sweep space {sweep.name!r}: {n_f} frequencies "
+          f"{sweep.band.start:g}-{sweep.band.stop:g} Hz every {sweep.band.step:g} Hz")
+    print(f"{'workers':>7} {'kind':>7} {'rows':>5} {'wall_s':>8} {'rows/min':>9} "
+          f"{'answers/min':>12} {'solve_s/row':>12} {'full solves':>11} {'max est.':>9} "
+          f"{'kB/row':>7} {'failed':>6}")
+    for w in workers:
+        for kind, space, count in (("single", single, n), ("sweep", sweep, n_sweep)):
+            run = _generate(space, count, w)
+            df = run["df"]
+            ok = df[df["status"] == "ok"]
+            per = n_f if kind == "sweep" else 1
+            solves = (f"{ok['sweep_full_solves'].mean():>11.2f}" if kind == "sweep"
+                      else f"{'1':>11}")
+            est = (f"{ok['sweep_error_estimate'].max():>9.1e}" if kind == "sweep"
+                   else f"{'-':>9}")
+            print(f"{w:>7} {kind:>7} {count:>5} {run['wall']:>8.2f} {run['rate']:>9.1f} "
+                  f"{run['rate'] * per:>12.0f} {df['wall_s'].mean():>12.3f} {solves} {est} "
+                  f"{run['bytes_per_row'] / 1e3:>7.1f} {run['failed']:>6}", flush=True)
 
 
 if __name__ == "__main__":

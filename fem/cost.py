@@ -15,7 +15,8 @@ the unknown count is the reliable part and the limit is stated in it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 from . import haptic_unit
 from .absorbers import (
@@ -31,7 +32,7 @@ from .problem import (
     resolve_effects,
     shortest_shear_wavelength,
 )
-from .scene import Scene, SceneError
+from .scene import LoadKind, Scene, SceneError
 
 __all__ = ["DEFAULT_MAX_UNKNOWNS", "CostEstimate", "check_cost", "estimate_cost"]
 
@@ -159,20 +160,40 @@ def estimate_cost(scene: Scene) -> CostEstimate:
     return CostEstimate(cells_r, cells_z, n, memory, seconds, absorber_r, absorber_z, near_r)
 
 
+def _work_limit(scene: Scene, est: CostEstimate, max_unknowns: float) -> float | None:
+    """Largest number of time steps a transient of ``est`` may take (None: within limits)."""
+    a = scene.analysis
+    if a.kind != "transient" or est.unknowns > max_unknowns:
+        return None
+    steps = a.duration_ms / a.time_step_ms
+    if est.unknowns * steps > max_unknowns * STEPS_AT_LIMIT:
+        return max_unknowns * STEPS_AT_LIMIT / est.unknowns
+    return None
+
+
+def _fits(scene: Scene, max_unknowns: float) -> bool:
+    """True when ``scene`` passes :func:`check_cost` (no advice is built)."""
+    try:
+        est = estimate_cost(scene)
+    except (ValueError, ArithmeticError):
+        return False
+    return est.unknowns <= max_unknowns and _work_limit(scene, est, max_unknowns) is None
+
+
 def check_cost(scene: Scene, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> CostEstimate:
-    """The estimate, or a SceneError naming what drives a size above ``max_unknowns``."""
+    """The estimate, or a SceneError naming what drives a size above ``max_unknowns`` and a
+    value of that field that passes (checked on the changed scene) when one exists."""
     est = estimate_cost(scene)
     a = scene.analysis
-    if a.kind == "transient" and est.unknowns <= max_unknowns:
+    most = _work_limit(scene, est, max_unknowns)
+    if most is not None:
         steps = a.duration_ms / a.time_step_ms
-        if est.unknowns * steps > max_unknowns * STEPS_AT_LIMIT:
-            most = max_unknowns * STEPS_AT_LIMIT / est.unknowns
-            raise SceneError("analysis.duration_ms", f"analysis.duration_ms: {steps:.3g} time "
-                             f"steps of {est.unknowns:.3g} unknowns exceed the work limit "
-                             f"({max_unknowns:.3g} unknowns x {STEPS_AT_LIMIT} steps): use at "
-                             f"most {most:.3g} steps (analysis.duration_ms <= "
-                             f"{most * a.time_step_ms:.3g} at this analysis.time_step_ms), a "
-                             "coarser mesh, or raise the limit")
+        raise SceneError("analysis.duration_ms", f"analysis.duration_ms: {steps:.3g} time "
+                         f"steps of {est.unknowns:.3g} unknowns exceed the work limit "
+                         f"({max_unknowns:.3g} unknowns x {STEPS_AT_LIMIT} steps): use at "
+                         f"most {most:.3g} steps (analysis.duration_ms <= "
+                         f"{most * a.time_step_ms:.3g} at this analysis.time_step_ms), a "
+                         "coarser mesh, or raise the limit")
     if est.unknowns <= max_unknowns:
         return est
     field, advice = _driver(scene, est, max_unknowns)
@@ -183,39 +204,148 @@ def check_cost(scene: Scene, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> Cost
                      "--max-unknowns N, or fem.simulate(scene, max_unknowns=N))")
 
 
+def _frequency_field(scene: Scene) -> tuple[str, float]:
+    """The scene field the absorbers and wavelengths follow (:func:`fem.problem.drive_omega`):
+    the motor's rated speed for a transient ERM unit, else the analysis frequency."""
+    if scene.analysis.kind == "transient" and scene.load.kind == LoadKind.UNIT:
+        return "unit.motor.rated_frequency_hz", scene.unit.motor.rated_frequency_hz
+    return "analysis.frequency_hz", scene.analysis.frequency_hz
+
+
+def _with_frequency(scene: Scene, field: str, value: float) -> Scene:
+    if field == "unit.motor.rated_frequency_hz":
+        motor = replace(scene.unit.motor, rated_frequency_hz=value)
+        return replace(scene, unit=replace(scene.unit, motor=motor))
+    return replace(scene, analysis=replace(scene.analysis, frequency_hz=value))
+
+
+def _passing_frequency(scene: Scene, limit: float, field: str, value: float,
+                       factor: float) -> float | None:
+    """The first of value * factor^k (k = 1..60) within the field's range that fits (none
+    for a sweep: its band is the question asked, not a knob to turn)."""
+    if scene.analysis.kind == "sweep":
+        return None
+    top = 1e4 if field == "unit.motor.rated_frequency_hz" else 1e5
+    for k in range(1, 61):
+        f = float(f"{value * factor**k:.3g}")
+        if not 1e-3 <= f <= top:
+            return None
+        try:
+            if _fits(_with_frequency(scene, field, f), limit):
+                return f
+        except (ValueError, TypeError):
+            return None
+    return None
+
+
+def _passing_cells(scene: Scene, limit: float, axis: str) -> list[int] | None:
+    """Counts of ``mesh.cells_<axis>`` scaled down (each at least 1) until the scene fits."""
+    counts = getattr(scene.mesh, f"cells_{axis}")
+    for k in range(1, 200):
+        scale = 0.9**k
+        trial = [max(1, math.floor(c * scale)) for c in counts]
+        if _fits(replace(scene, mesh=replace(scene.mesh, **{f"cells_{axis}": tuple(trial)})),
+                 limit):
+            return trial
+        if all(c == 1 for c in trial):
+            return None
+    return None
+
+
+def _fixed_cells_driver(scene: Scene, est: CostEstimate, limit: float
+                        ) -> tuple[str, str] | None:
+    """``mesh.cells_r`` / ``mesh.cells_z`` when their fixed counts, not the sizes, make the
+    scene too large."""
+    m = scene.mesh
+    if m.cells_r is None and m.cells_z is None:
+        return None
+    free = estimate_cost(replace(scene, mesh=replace(m, cells_r=None, cells_z=None)))
+    over = [(sum(c) / max(n, 1.0), axis) for c, n, axis in
+            ((m.cells_r, free.cells_r, "r"), (m.cells_z, free.cells_z, "z")) if c is not None]
+    ratio, axis = max(over)
+    if ratio <= 1.0:
+        return None
+    field = f"mesh.cells_{axis}"
+    given = list(getattr(m, f"cells_{axis}"))
+    trial = _passing_cells(scene, limit, axis)
+    shown = f"{given}" if len(given) <= 6 else f"[{given[0]}, ... {len(given)} counts]"
+    advice = (f"{field} = {shown} fixes {sum(given)} cells along {axis} where the element "
+              f"sizes need about {free.cells_r if axis == 'r' else free.cells_z:.0f}")
+    if trial is not None:
+        advice += (f"; use {field} = {trial} or fewer (each segment keeping at least the cells "
+                   "its element sizes need)")
+    return field, advice + f", or leave {field} out to let the sizes choose the counts"
+
+
 def _driver(scene: Scene, est: CostEstimate, limit: float) -> tuple[str, str]:
     """The field most responsible for the size, and what to change."""
     ratio = est.unknowns / limit  # one length scaled by this fits: unknowns ~ 1 / h (one axis)
     shrink = math.sqrt(ratio)  # both axes (far size, or a wavelength that caps every size)
     m, t = scene.mesh, scene.tissue
-    if scene.analysis.kind != "static":
+    fixed = _fixed_cells_driver(scene, est, limit)
+    if fixed is not None:
+        return fixed
+    wave = scene.analysis.kind != "static"
+    if wave:
+        f_field, freq = _frequency_field(scene)
         lam_min, name = shortest_shear_wavelength(scene)
         h_wave = lam_min * m.order / ELEMENTS_PER_WAVELENGTH
         if m.follow_wavelength and h_wave * 1e3 < m.near_size_mm:
             field = _material_field(scene, name)
+            lower = _passing_frequency(scene, limit, f_field, freq, 1 / 1.25)
             return field, (f"the shortest shear wavelength ({lam_min * 1e3:.3g} mm, in {name!r} "
-                           f"at {scene.analysis.frequency_hz:g} Hz) sets the element size "
-                           f"{h_wave * 1e3:.3g} mm; a stiffer {field} (about {ratio:.3g}x) "
-                           "or a lower analysis.frequency_hz would fit, or set "
-                           "mesh.follow_wavelength = false to mesh at the given sizes")
+                           f"at {f_field} = {freq:g} Hz) sets the element size "
+                           f"{h_wave * 1e3:.3g} mm; a stiffer {field} (about {ratio:.3g}x)"
+                           + (f" or {f_field} <= {lower:g} would fit" if lower else
+                              " would fit")
+                           + ", or set mesh.follow_wavelength = false to mesh at the given "
+                           "sizes")
     tissue_r, tissue_z = est.cells_r - est.absorber_r, est.cells_z - est.absorber_z
-    wave = scene.analysis.kind != "static"
     if wave and (est.absorber_r > tissue_r or est.absorber_z > tissue_z):
-        return "analysis.frequency_hz", (
-            f"at {scene.analysis.frequency_hz:g} Hz the absorbing layers (one wavelength thick) "
-            "reach far beyond the tissue; use a higher frequency, a static analysis, or "
-            'tissue.side = "fixed" and tissue.base = "fixed"')
+        higher = _passing_frequency(scene, limit, f_field, freq, 1.25)
+        thick = ("one wavelength" if scene.analysis.kind == "harmonic" else
+                 f"{DAMPING_LAYER_WAVELENGTHS:g} wavelengths")
+        return f_field, (
+            f"at {f_field} = {freq:g} Hz the absorbing layers ({thick} thick) reach far "
+            "beyond the tissue; "
+            + (f"use {f_field} >= {higher:g}, " if higher else "")
+            + 'or make the absorbing boundaries fixed (tissue.side = "fixed", '
+            'tissue.base = "fixed")')
+    far = _walk(scene, limit, lambda v: replace(scene, mesh=replace(m, far_size_mm=v)),
+                m.far_size_mm * shrink, 1.1)
+    far_text = f"mesh.far_size_mm >= {far:.3g}" if far else "a coarser mesh.far_size_mm"
     if tissue_r >= tissue_z:
         if est.near_r > 0.5 * tissue_r:
-            return "mesh.near_size_mm", (f"use mesh.near_size_mm >= "
-                                         f"{m.near_size_mm * ratio:.3g}")
-        return "tissue.radius_mm", (f"use tissue.radius_mm <= {t.radius_mm / ratio:.3g} or "
-                                    f"mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+            near = _walk(scene, limit, lambda v: replace(scene, mesh=replace(
+                m, near_size_mm=v, far_size_mm=max(v, m.far_size_mm))),
+                m.near_size_mm * ratio, 1.1)
+            return "mesh.near_size_mm", (
+                f"use mesh.near_size_mm >= {near or m.near_size_mm * ratio:.3g}"
+                + (" (and mesh.far_size_mm at least as large)"
+                   if near and near > m.far_size_mm else ""))
+        radius = _walk(scene, limit, lambda v: replace(scene, tissue=replace(t, radius_mm=v)),
+                       t.radius_mm / ratio, 0.9)
+        return "tissue.radius_mm", (f"use tissue.radius_mm <= "
+                                    f"{radius or t.radius_mm / ratio:.3g} or {far_text}")
     thickest = max(range(len(t.layers)), key=lambda i: t.layers[i].thickness_mm)
     return f"tissue.layer[{thickest}].thickness_mm", (
         f"the tissue is {t.depth_mm:g} mm deep; use a thinner "
         f"tissue.layer[{thickest}].thickness_mm (the total <= {t.depth_mm / ratio:.3g} mm) "
-        f"or mesh.far_size_mm >= {m.far_size_mm * shrink:.3g}")
+        f"or {far_text}")
+
+
+def _walk(scene: Scene, limit: float, build: Callable[[float], Scene], start: float,
+          factor: float) -> float | None:
+    """The first of start * factor^k (k = 0..40, three significant digits) whose scene
+    ``build(value)`` fits the limit; None when none does (or the scene cannot be built)."""
+    for k in range(41):
+        value = float(f"{start * factor**k:.3g}")
+        try:
+            if value > 0 and _fits(build(value), limit):
+                return value
+        except (ValueError, TypeError, ArithmeticError):
+            return None
+    return None
 
 
 def _material_field(scene: Scene, name: str) -> str:

@@ -81,28 +81,44 @@ def lagrange_weights(nodes: NDArray, x: float) -> tuple[NDArray, NDArray]:
 def stiffness_and_mass(problem: Problem, idx: NDArray, stretch) -> tuple[NDArray, NDArray]:
     """Element stiffness K* (hysteretic moduli) and mass M (ne, nd, nd) of elements ``idx``
     under ``stretch`` (None: none), formed as the harmonic solve forms them."""
+    K = _formed(problem, idx, stretch, None)
+    zero = np.zeros(problem.domain.mesh.n_elements)
+    return K, _formed(problem, idx, stretch, 1.0, moduli=(zero, zero))
+
+
+def dynamic_matrices(problem: Problem, idx: NDArray, stretch, omega: float) -> NDArray:
+    """K* - omega^2 M (ne, nd, nd) of elements ``idx`` under ``stretch``, in one formation."""
+    return _formed(problem, idx, stretch, -omega**2)
+
+
+def _formed(problem: Problem, idx: NDArray, stretch, mass_factor: float | None,
+            moduli: tuple[NDArray, NDArray] | None = None) -> NDArray:
+    """sum of stiffness (``moduli``: shear and bulk per element, default the hysteretic
+    ones) and ``mass_factor`` x mass (none if None) of elements ``idx``."""
     domain, mode = problem.domain, problem.mode
     mesh = domain.mesh
-    mu, kappa = domain.element_property("mu"), domain.element_property("kappa")
-    eta, rho = domain.element_property("loss_factor"), domain.element_property("density")
-    mu_star, kappa_star = mu * (1.0 + 1j * eta), kappa * (1.0 + 1j * eta)
+    if moduli is None:
+        eta = domain.element_property("loss_factor")
+        moduli = (domain.element_property("mu") * (1.0 + 1j * eta),
+                  domain.element_property("kappa") * (1.0 + 1j * eta))
+    mu, kappa = moduli
+    rho = domain.element_property("density")
     nd = mesh.elements.shape[1] * elements.dofs_per_node(mode)
-    K = np.empty((idx.size, nd, nd), dtype=complex)
-    M = np.empty((idx.size, nd, nd), dtype=complex)
+    out = np.empty((idx.size, nd, nd), dtype=complex)
     by_column = columns.column_path(mesh, stretch)[idx]
     col = idx[by_column]
     if col.size:
-        zero = np.zeros(col.size)
-        K[by_column] = columns.column_matrices(
-            mesh, col, stretch, mode, np.column_stack([mu_star[col], kappa_star[col]]))
-        M[by_column] = columns.column_matrices(
-            mesh, col, stretch, mode, np.column_stack([zero, zero, rho[col]]))
+        coef = [mu[col], kappa[col]] + ([] if mass_factor is None else [mass_factor * rho[col]])
+        out[by_column] = columns.column_matrices(mesh, col, stretch, mode,
+                                                 np.column_stack(coef))
     rest = idx[~by_column]
     if rest.size:
         g = elements.gauss_data(mesh, stretch, subset=rest)
-        K[~by_column] = elements.stiffness(g, mode, mu_star[rest], kappa_star[rest])
-        M[~by_column] = elements.mass(g, mode, rho[rest])
-    return K, M
+        Z = elements.stiffness(g, mode, mu[rest], kappa[rest])
+        if mass_factor is not None:
+            Z = Z + mass_factor * elements.mass(g, mode, rho[rest])
+        out[~by_column] = Z
+    return out
 
 
 @dataclass(frozen=True)
@@ -182,8 +198,8 @@ class SweepOperator:
         Z_pml = np.empty((nodes_t.size, pml.size, nd, nd), dtype=complex)
         for j, t in enumerate(nodes_t):
             if pml.size:
-                K, M = stiffness_and_mass(problem, pml, replace(stretch, omega=1.0 / t))
-                Z_pml[j] = K - M / t**2
+                Z_pml[j] = dynamic_matrices(problem, pml, replace(stretch, omega=1.0 / t),
+                                            1.0 / t)
         layer = ElementGroup.build(dm, edofs[pml], Z_pml)
         springs = tuple(ElementGroup.build(dm, d, K) for _, d, K in problem.extra)
         return cls(problem, dm, inside, pml, ElementGroup.build(dm, edofs[inside], K_in),

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from fieldspec.documents import read_toml_file as _read_toml
 from fieldspec.errors import FieldError
 
 __all__ = ["dumps", "read_toml_file", "toml_value"]
@@ -24,15 +24,10 @@ _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
 
 def read_toml_file(path: str | Path, error: type[FieldError], what: str) -> dict[str, Any]:
-    """The tables of a TOML file (a UTF-8 byte-order mark is accepted); an unreadable file or
-    a syntax error raises ``error`` with field ``"<file>"``, naming ``what`` and the line."""
-    path = Path(path)
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except OSError as err:
-        raise error("<file>", f"cannot read {what} {str(path)!r}: {err}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise error("<file>", f"{path}: invalid TOML: {err}") from None
+    """The tables of a TOML file (a UTF-8 byte-order mark is accepted); an unreadable file,
+    a syntax error or a file beyond the size and nesting limits of
+    :mod:`fieldspec.documents` raises ``error`` with field ``"<file>"``, naming ``what``."""
+    return _read_toml(path, error, what)
 
 
 def toml_value(value: Any) -> str:

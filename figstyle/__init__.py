@@ -134,12 +134,16 @@ def save(fig: Any, path: str | os.PathLike, **kwargs: Any) -> None:
     plt.close(fig)
 
 
+#: The PNG ``Software`` text of every figure (hapticrom.outputs recognises its own files by it).
+SOFTWARE = "hapticrom"
+
+
 def _save_png(fig: Any, path: str | os.PathLike, kwargs: dict[str, Any]) -> None:
     """A 256-colour palette PNG without dithering: line plots hold far fewer colours, so it
     looks the same at a third of the size (README figures stay well under 150 kB)."""
     import io
 
-    from PIL import Image
+    from PIL import Image, PngImagePlugin
 
     buf = io.BytesIO()
     fig.savefig(buf, **{**kwargs, "format": "png"})
@@ -147,4 +151,6 @@ def _save_png(fig: Any, path: str | os.PathLike, kwargs: dict[str, Any]) -> None
     with Image.open(buf) as im:
         rgb = im.convert("RGB")
     pal = rgb.quantize(colors=256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-    pal.save(path, format="PNG", optimize=True)
+    info = PngImagePlugin.PngInfo()
+    info.add_text("Software", SOFTWARE)  # how hapticrom recognises its own figures
+    pal.save(path, format="PNG", optimize=True, pnginfo=info)

@@ -18,7 +18,6 @@ the step.
 from __future__ import annotations
 
 import copy
-import json
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -114,16 +113,10 @@ def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
 
 
 def load_plan(path: str | Path, schema: dict[str, Any] | None = None) -> PlanFile:
-    try:
-        data = json.loads(Path(path).read_text())
-    except OSError as err:
-        raise PlanFileError("<file>", f"cannot read plan {str(path)!r}: {err}") from None
-    except json.JSONDecodeError as err:
-        raise PlanFileError("<file>", f"{path}: invalid JSON: {err}") from None
-    except RecursionError:
-        raise PlanFileError("<file>", f"{path}: nested too deeply to be a plan") from None
+    from fieldspec.documents import read_json_file  # size and nesting limits
     from planner.paths import resolve_plan_models  # model paths are relative to the plan
 
+    data = read_json_file(path, PlanFileError, "plan")
     plan = plan_from_dict(data, schema)  # checked as written; then its model paths made usable
     return replace(plan, data=resolve_plan_models(copy.deepcopy(plan.data), path))
 

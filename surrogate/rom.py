@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from surrogate.registry import package_versions, write_model
+from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     FORMAT,
@@ -138,7 +138,7 @@ def _speed_and_phase(t: NDArray, schedule_ms: Sequence[Sequence[float]], tau_up_
 def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], MotorConstants, list[str]]:
     """Successful transient unit runs of the datasets, their common motor law, and the
     sha256 of each dataset's manifest. Raises ValueError if a dataset holds no such run."""
-    import pandas as pd
+    from surrogate.data.store import Store
 
     runs: list[Run] = []
     motor: MotorConstants | None = None
@@ -148,7 +148,7 @@ def load_runs(paths: Sequence[str | Path]) -> tuple[list[Run], MotorConstants, l
         if not manifest.is_file():
             raise ValueError(f"--data: {path} is not a dataset (no _manifest.json)")
         hashes.append(hashlib.sha256(manifest.read_bytes()).hexdigest())
-        df = pd.read_parquet(path)
+        df = Store.open(path).read()  # the manifest's parts, checked against their digests
         if "history_center_um" not in df:
             raise ValueError(f"--data: {path} holds no center/edge histories (generate it "
                              "from a transient space of a unit)")
@@ -391,8 +391,7 @@ def train(data: Sequence[str | Path], out: str | Path, *, threshold: float = 1e-
     the held-out rows, register ``out`` (card.json + coefficients.json, written atomically
     by :func:`surrogate.registry.write_model`); returns the card."""
     out = Path(out)
-    if out.exists() and not overwrite:
-        raise FileExistsError(f"{out} exists (pass overwrite / --overwrite to replace it)")
+    check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if not 0 < threshold < 1:
         raise ValueError(f"threshold = {threshold!r}: allowed (0, 1)")
     runs, motor, hashes = load_runs(data)

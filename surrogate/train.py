@@ -29,7 +29,12 @@ from surrogate.data.worker import edge_radius_mm
 from surrogate.features import codes_from_frame, input_specs
 from surrogate.kind import SurrogateKind
 from surrogate.pod import ProfileTargets, output_columns
-from surrogate.registry import manifest_sha256, package_versions, write_model
+from surrogate.registry import (
+    check_model_out,
+    manifest_sha256,
+    package_versions,
+    write_model,
+)
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import Predictor, make_session
 
@@ -88,6 +93,9 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -
     for path in paths:
         store = Store.open(path)
         manifest = store.manifest
+        if manifest.get("band"):
+            raise ValueError(f"--data: {path} is a sweep dataset (one row per design over a "
+                             "band); these models train on single-frequency rows")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
         specs = these if specs is None else _merge_specs(specs, these, str(path))
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)
@@ -184,8 +192,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     if spec.trainer is not None:
         return spec.trainer(paths, out, seed=seed, overwrite=overwrite,
                             options=dict(options or {}))
-    if Path(out).exists() and not overwrite:
-        raise FileExistsError(f"{out} exists (pass --overwrite to replace it)")
+    check_model_out(out, overwrite)  # before the work: the output may not be replaced
     data = load_datasets(paths, categorical=categorical)
     tr, te = split(len(data.codes), test_fraction, seed)
     X = encode(data.codes, data.specs)

@@ -205,6 +205,7 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
             out[name] = table
     _check_counts(out)
     _check_band(out["analysis"])
+    _check_motor_drive(out, ctx["load.kind"])
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
                          "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
@@ -249,6 +250,30 @@ def _check_counts(out: Mapping[str, Mapping[str, Any]]) -> None:
                          f"analysis.duration_ms = {a['duration_ms']!r}: allowed time_step_ms >= "
                          f"{a['duration_ms'] / MAX_TIME_STEPS:g} (at most {MAX_TIME_STEPS} "
                          "steps)")
+
+
+#: Largest drive voltage of an ERM transient unless the schedule goes higher [V] (the
+#: simulator's guard, fem.transient_analysis.load_history).
+ERM_MAX_VOLTAGE_V = 4.5
+
+
+def _check_motor_drive(out: Mapping[str, Mapping[str, Any]], load_kind: Any) -> None:
+    """An ERM transient spins the motor up to its rated speed within the largest drive voltage
+    (4.5 V, or the schedule's peak when higher): a rated voltage above it is refused here, at
+    load, naming the scene field (the solver's motor model would refuse it at solve)."""
+    a = out["analysis"]
+    if a["kind"] != "transient" or str(load_kind) != "unit" or "unit" not in out:
+        return
+    motor = out["unit"].get("motor") or {}
+    rated = motor.get("rated_voltage_V")
+    peak = max((abs(float(v)) for _, v in a.get("voltage_schedule") or ()), default=0.0)
+    top = max(ERM_MAX_VOLTAGE_V, peak)
+    if rated is not None and float(rated) > top:
+        raise SceneError("unit.motor.rated_voltage_V", f"unit.motor.rated_voltage_V = "
+                         f"{rated!r} is out of range for a transient: allowed "
+                         f"unit.motor.start_voltage_V < rated_voltage_V <= {top:g} V (the "
+                         f"largest drive voltage: {ERM_MAX_VOLTAGE_V:g} V, or the peak of "
+                         "analysis.voltage_schedule when higher)")
 
 
 def make(cls: type, table: Mapping[str, Any]) -> Any:

@@ -22,6 +22,8 @@ def register(subparsers: Any) -> None:
                    help="3 designs, 2 mesh levels, tiny learning curves (about a minute)")
     a.add_argument("--out", default=DEFAULT_OUT, metavar="FILE.md",
                    help=f"report file (default: {DEFAULT_OUT}); the plot goes to FILE.png")
+    a.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     a.set_defaults(func=run)
 
 
@@ -33,8 +35,8 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix != ".md":
         raise ValueError(f"--out {args.out}: must name a .md file (the plot goes beside it)")
     png = out.with_suffix(".png")
-    check_output_file("--out", out)
-    check_output_file("--out", png)
+    check_output_file("--out", out, args.overwrite)
+    check_output_file("--out", png, args.overwrite)
 
     from studies.accuracy import run_study
     from studies.accuracy.report import render, write_plot

@@ -1,8 +1,10 @@
-"""``hapticrom dataset info|validate|merge``: inspect, check and combine datasets.
+"""``hapticrom dataset info|validate|merge|seal``: inspect, check, combine and seal datasets.
 
 Exit codes (the policy of :mod:`hapticrom.cli`): ``validate`` exits 0 for a valid dataset and
 2 (bad input) with the list of problems; ``info`` exits 2 for a damaged or missing dataset,
-like every command given bad input.
+like every command given bad input. Files that are not part of a dataset are listed (``note:``)
+and ignored. ``seal`` records the part digests of a dataset written before hapticrom recorded
+them (after validating it); every reader refuses an unsealed dataset.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ def register(subparsers: Any) -> None:
     """Add the ``dataset`` sub-parser and its three sub-commands."""
     p = subparsers.add_parser("dataset", help="inspect, validate or merge datasets")
     sub = p.add_subparsers(dest="dataset_command", required=True,
-                           metavar="{info,validate,merge}")
+                           metavar="{info,validate,merge,seal}")
     info = sub.add_parser("info", help="summary of a dataset")
     info.add_argument("path")
     info.add_argument("--json", action="store_true", help="print JSON")
@@ -33,6 +35,10 @@ def register(subparsers: Any) -> None:
     merge.add_argument("--allow-mixed-solvers", action="store_true",
                        help="merge results of different solver versions")
     merge.set_defaults(func=run_merge)
+    seal = sub.add_parser("seal", help="record the part digests of a dataset written before "
+                          "they were recorded (validates it first)")
+    seal.add_argument("path")
+    seal.set_defaults(func=run_seal)
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -63,11 +69,15 @@ def format_info(info: dict[str, Any]) -> str:
         f"solver    {solver.get('version')} ({solver.get('hash')}) git "
         f"{solver.get('git_revision')}; all: {', '.join(info['solver_versions'])}",
         f"analysis  {info.get('analysis_kind')}; mesh {info.get('mesh')}",
+        f"outputs   {info.get('outputs')}",
         f"rows      {info['rows']} ({info['ok']} ok, {info['failed']} failed) in "
         f"{info['parts']} parts, {info['bytes'] / 1e6:.2f} MB",
         f"sources   {', '.join(f'{k}: {v}' for k, v in info['by_source'].items()) or '-'}",
         f"runs      {info['runs']} ({info['interrupted_runs']} interrupted)",
     ]
+    if info.get("stray_files"):
+        lines.append(f"note      ignored (not part of the dataset): "
+                     f"{', '.join(info['stray_files'])}")
     if info["temp_files"]:
         lines.append(f"note      {info['temp_files']} unfinished temp parts (ignored; removed "
                      "by the next generate)")
@@ -78,7 +88,10 @@ def run_validate(args: argparse.Namespace) -> int:
     """Exit 0 when valid, 2 (an invalid input dataset) with the list of problems."""
     from surrogate.data.inspect import validate_dataset
 
-    problems = validate_dataset(args.path, rehash=args.rehash)
+    notes: list[str] = []
+    problems = validate_dataset(args.path, rehash=args.rehash, notes=notes)
+    for n in notes:
+        print(f"note: {n}")
     for p in problems:
         print(f"problem: {p}")
     if problems:
@@ -91,9 +104,21 @@ def run_validate(args: argparse.Namespace) -> int:
 
 def run_merge(args: argparse.Namespace) -> int:
     """Merge the inputs into a new dataset."""
+    from hapticrom.outputs import check_not_input
     from surrogate.data.inspect import merge_datasets
 
+    check_not_input("--out", args.out, args.inputs)
     res = merge_datasets(args.out, args.inputs, args.allow_mixed_solvers)
     print(f"{args.out}: {res['rows_out']} rows from {res['rows_in']} "
           f"({res['duplicates_dropped']} duplicates dropped), {res['parts']} parts")
+    return 0
+
+
+def run_seal(args: argparse.Namespace) -> int:
+    """Record part digests (exit 2 with the problems if the dataset is not valid)."""
+    from surrogate.data.inspect import seal_dataset
+
+    res = seal_dataset(args.path)
+    what = "sealed" if res["sealed"] else "already sealed, verified"
+    print(f"{args.path}: {what}: {res['parts']} parts, {res['rows']} rows")
     return 0

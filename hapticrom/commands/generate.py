@@ -84,8 +84,10 @@ def run(args: argparse.Namespace) -> int:
     if rep.new == 0:
         print(f"{rep.path}: already holds the {rep.requested} requested samples")
     else:
+        answers = (f" = {rep.answers_per_min:.0f} design-frequency answers/min "
+                   f"({rep.frequencies} frequencies per sample)" if rep.frequencies > 1 else "")
         print(f"{rep.path}: {rep.new} new samples ({rep.new_ok} ok, {rep.new_failed} "
-              f"failed) in {rep.wall_s:.1f} s = {rep.rate_per_min:.0f} samples/min on "
-              f"{rep.workers} workers ({rep.backend}); {rep.already_done + rep.new} of "
+              f"failed) in {rep.wall_s:.1f} s = {rep.rate_per_min:.0f} samples/min{answers} "
+              f"on {rep.workers} workers ({rep.backend}); {rep.already_done + rep.new} of "
               f"{rep.requested} done")
     return 0

@@ -19,8 +19,9 @@ def _list(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no models under {args.root}")
     for r in rows:
+        status = f"ok  {r['headline']}" if r["status"] == "ok" else r["status"]
         print(f"{r['name']:24s} {r.get('kind') or '-':4s} {r.get('created') or '-':26s} "
-              f"{r['status'] if r['status'] != 'ok' else r['headline']}")
+              f"{status}")
     return 0 if all(r["status"] == "ok" for r in rows) else 2  # a broken model: bad input
 
 
@@ -36,7 +37,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``models`` subcommand group."""
     p = subparsers.add_parser("models", help="list or show registered models")
     sub = p.add_subparsers(dest="models_command", required=True, metavar="ACTION")
-    ls = sub.add_parser("list", help="every model under a directory, verified")
+    ls = sub.add_parser("list", help="every model under a directory, verified: ok, or "
+                        "refused and why (exit 2 when any is refused)")
     ls.add_argument("--root", default="models", help="models directory (default: models)")
     ls.set_defaults(func=_list)
     show = sub.add_parser("show", help="print a model's verified card")

@@ -125,20 +125,29 @@ def _run(args: argparse.Namespace) -> int:
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
-            check_output_file(f"--{opt}", getattr(args, opt))
-    plan = plan_layout(load_layout(args.layout))
+            check_output_file(f"--{opt}", getattr(args, opt), args.overwrite)
+    req, tissue = load_layout(args.layout), None
+    if args.tissue:
+        from planner.tissue import apply_tissue, load_tissue
+
+        tissue = load_tissue(args.tissue)
+        req = apply_tissue(req, tissue)
+    plan = plan_layout(req)
     try:
         verify = _verify(plan) if args.verify and plan.best is not None else None
     except RuntimeError as err:  # the FE solve itself failed: said, no traceback, nothing written
         print(f"hapticrom plan: failed: {err}", file=sys.stderr)
         return 1
     _print_plan(plan)
+    spread = _print_tissue(plan, tissue) if tissue is not None else None
     if verify is not None:
         _print_verify(verify)
     if args.out:
         doc = relative_plan_models(plan_to_dict(plan), args.out)
         if args.verify:
             doc["verify"] = verify
+        if tissue is not None:
+            doc["tissue"] = spread
         with atomic_path(args.out) as tmp:
             tmp.write_text(json.dumps(seal_plan(doc), indent=1) + "\n")
         print(f"wrote {args.out}")
@@ -246,6 +255,30 @@ def _print_uncertainty(plan: object) -> None:
           f"{' [extrapolated]' if u['extrapolated'] else ''}")
 
 
+def _print_tissue(plan: Any, tissue: Any) -> dict[str, Any] | None:
+    """The calibrated tissue and the chosen design's pitch over its posterior draws."""
+    from planner.tissue import posterior_pitch
+
+    print(f"  tissue from {tissue.path}: " + ", ".join(
+        f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
+        for k, v in tissue.point.items()))
+    s = posterior_pitch(plan, tissue)
+    if s is None:
+        return None
+
+    def mm(x: float | None) -> str:
+        return "infeasible" if x is None else f"{x:.2f} mm"
+
+    print(f"  pitch over {s['draws']} posterior draws (prediction): median "
+          f"{mm(s['pitch_mm_median'])}, 95 % [{mm(s['pitch_mm_2_5'])}, "
+          f"{mm(s['pitch_mm_97_5'])}], at the posterior's 95 % bound {mm(s['pitch_95_mm'])}; "
+          f"with the surrogate's 95 % bounds too {mm(s['pitch_95_with_surrogate_mm'])}")
+    print(f"  pitch for this person at the posterior's 95 % bound, judged as the plan is "
+          f"({s['holds_at']}): {mm(s['pitch_95_for_plan_mm'])} (the plan's "
+          f"{s['pitch_mm_at_point_estimate']:.2f} mm is at the posterior mean)")
+    return s
+
+
 def _print_timing(timing: dict | None) -> None:
     if timing is None:
         return
@@ -276,4 +309,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="re-solve the winning design with the FE solver (about a second) and "
                    "judge the plan on it with the same criterion (written into the plan under "
                    f"'verify'; exit {EXIT_VERIFY_FAILED} when the FE refutes it)")
+    p.add_argument("--tissue", metavar="CALIBRATION",
+                   help="plan for a person: the tissue of a `hapticrom calibrate` document, its "
+                   "posterior uncertainty carried into the pitch (planner.tissue)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     p.set_defaults(func=_run)

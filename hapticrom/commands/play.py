@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from hapticrom.commands._args import number_in
-from hapticrom.outputs import atomic_dir, check_output_dir
+from hapticrom.outputs import check_dir_output, check_not_input, write_dir
 
 __all__ = ["register"]
 
@@ -160,8 +160,11 @@ def _run(args: argparse.Namespace) -> int:
     kind, _ = parse_device(args.device)
     if kind != "serial" and not args.out:
         raise ValueError(f"--device {kind} writes files: give --out DIR")
-    if args.out:
-        check_output_dir("--out", args.out)
+    if args.out and kind == "serial":  # a folder of session records, added to
+        check_not_input("--out", args.out, [args.plan, args.pattern])
+    elif args.out:
+        check_dir_output("--out", args.out, kind="play", overwrite=args.overwrite,
+                         reads=[args.plan, args.pattern])
     plan = load_plan(args.plan, schema("plan"))
     schedule = build_schedule(load_pattern(args.pattern), plan)
     _user_limits(args)  # a bad limits file is refused before any device is opened
@@ -187,12 +190,13 @@ def _run(args: argparse.Namespace) -> int:
         if outcome is None and record is not None:
             print(f"wrote {record.path}")
     else:
-        with atomic_dir(args.out) as tmp:
+        with write_dir("--out", args.out, kind="play", overwrite=args.overwrite,
+                       reads=[args.plan, args.pattern]) as tmp:
             with open_device(args.device, plan, tmp) as dev:
                 outcome = _play(kind, dev, args, plan, schedule, meter)
             if outcome is not None and kind != "log":
                 raise outcome  # nothing to keep: the sim draws only what it played
-            names = sorted(p.name for p in tmp.iterdir())
+            names = sorted(p.name for p in tmp.iterdir())  # before the marker is added
         for name in names:
             print(f"wrote {Path(args.out) / name}" + (" (the refusal)" if outcome else ""))
     if outcome is None:
@@ -215,8 +219,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--device", required=True, metavar="sim|log|serial:PORT",
                    help="sim: render the skin field; log: write the commands; serial:PORT: "
                    "drive the array (try it with `hapticrom emulate`)")
-    p.add_argument("--out", metavar="DIR", help="output directory (sim, log; serial: the "
-                   "session record)")
+    p.add_argument("--out", metavar="DIR", help="output directory (sim, log: an existing one "
+                   "is replaced only with --overwrite and only if play wrote it; serial: the "
+                   "folder session records are added to)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the output of an earlier play in --out")
     p.add_argument("--allow-edited-plan", action="store_true",
                    help="play a plan whose digest does not match (edited) or that has none; "
                    "recorded in the log")

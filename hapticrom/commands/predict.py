@@ -49,7 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     from surrogate.runtime import load_predictor
 
     if args.json:
-        check_output_file("--json", args.json)
+        check_output_file("--json", args.json, args.overwrite)
     p = load_predictor(args.model)
     points = _points(args, p.input_names)
     out = p.predict(points, extrapolate=args.extrapolate)
@@ -81,4 +81,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="allow inputs outside the trained range (flagged in the output)")
     p.add_argument("--json", metavar="OUT", help="write every output as JSON (schema: "
                    "docs/output-schema.md)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     p.set_defaults(func=_run)

@@ -25,6 +25,8 @@ def register(subparsers: Any) -> None:
                    help="refuse scenes estimated above N unknowns before solving (default "
                    "1e6, sized for 24 GB; 'inf' to disable)")
     p.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace existing output files even if hapticrom did not write them")
     p.set_defaults(func=run)
 
 
@@ -45,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     for opt in _OUTPUTS:
         if getattr(args, opt) is not None:
-            check_output_file(f"--{opt}", getattr(args, opt))
+            check_output_file(f"--{opt}", getattr(args, opt), args.overwrite)
     from fem.cost import DEFAULT_MAX_UNKNOWNS, check_cost
 
     limit = DEFAULT_MAX_UNKNOWNS if args.max_unknowns is None else args.max_unknowns

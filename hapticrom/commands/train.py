@@ -11,32 +11,39 @@ The kinds are those of the registry :mod:`surrogate.kinds`; this command knows n
 from __future__ import annotations
 
 import argparse
-import json
 
 __all__ = ["register"]
 
 
 def _options(text: str | None) -> dict:
+    from fieldspec import FieldError
+    from fieldspec.documents import loads_json  # nesting limits
+
     try:
-        options = json.loads(text) if text else {}
-    except json.JSONDecodeError as err:
-        raise ValueError(f"--options {text!r}: not JSON ({err.msg})") from None
+        options = loads_json(text, "--options", FieldError) if text else {}
+    except FieldError as err:
+        raise ValueError(f"--options {text[:80]!r}: not JSON within the limits ({err})") from None
     if not isinstance(options, dict):
         raise ValueError(f"--options {text!r}: expected a JSON object")
     return options
 
 
 def _run(args: argparse.Namespace) -> int:
+    from hapticrom.outputs import check_dir_output
+
     # Lazy: the registry loads scikit-learn, torch and pysindy (about 5 s measured with
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds
     from surrogate.train import train
 
+    options = _options(args.options)
     kind = kinds.get(args.kind)
+    check_dir_output("--out", args.out, kind="model", overwrite=args.overwrite,
+                     reads=args.data)
     card = train(args.data, kind.name, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
-                 options=_options(args.options))
+                 options=options)
     for line in kind.report(card):
         print(line)
     print(f"wrote {args.out}")
@@ -52,7 +59,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="model kind, a name of the registry surrogate.kinds: gp, nn, mlp "
                    "(harmonic amplitudes), rom (transient envelope); docs/architecture.md")
     p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing model")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing model directory (only one hapticrom wrote; never "
+                   "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")

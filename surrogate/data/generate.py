@@ -92,6 +92,7 @@ class GenerateReport:
     workers: int = 0
     parts_written: int = 0
     plan: PlanStats = field(default_factory=PlanStats)
+    frequencies: int = 1  # answers per sample: the band's frequencies for a sweep space
 
     @property
     def new(self) -> int:
@@ -102,6 +103,12 @@ class GenerateReport:
     def rate_per_min(self) -> float:
         """Samples per minute of wall time in this call (0 when nothing ran)."""
         return 60.0 * self.new / self.wall_s if self.wall_s > 0 and self.new else 0.0
+
+    @property
+    def answers_per_min(self) -> float:
+        """Design-frequency answers per minute (a sweep sample answers every frequency of its
+        band, a single-frequency sample one)."""
+        return self.rate_per_min * self.frequencies
 
 
 # --------------------------------------------------------------------------- the runner
@@ -171,7 +178,7 @@ def generate(space: Space | str | Path, n: int, out: str | Path, *,
     out = Path(out)
     store = None
     if Store.exists(out):
-        store = Store.open(out)
+        store = Store.open(out, deep=True)
     elif out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise DatasetError("out", f"{out} exists and is not a hapticrom dataset (nor an empty "
                            "directory)")
@@ -266,7 +273,8 @@ def _run(store: Store, space: Space, planned: list[Planned], stats: PlanStats,
     if stats.scanned >= int(sampling.get("scanned", 0)):
         sampling.update(scanned=stats.scanned, rejected=stats.rejected,
                         duplicates=stats.duplicates)
-    report = GenerateReport(store.path, len(planned), len(planned) - len(todo), plan=stats)
+    report = GenerateReport(store.path, len(planned), len(planned) - len(todo), plan=stats,
+                            frequencies=len(space.band.frequencies_hz) if space.band else 1)
     run = {"started": utc_now(), "finished": None, "command": command, "host":
            platform.node(), "python": sys.version.split()[0], "solver_hash": solver["hash"],
            "target_n": len(planned), "todo": len(todo)}

@@ -179,15 +179,21 @@ def _open_target(out: str | Path, space: Space | str | Path | None) -> tuple[Sto
     if isinstance(space, str | Path):
         space = load_space(space)
     if Store.exists(out):
-        store = Store.open(out)
+        store = Store.open(out, deep=True)
         if space is not None and space.space_hash() != store.manifest.get("space_hash"):
             raise DatasetError("space", f"space {space.name!r} differs from the space of {out}; "
                                "give no space to use the dataset's own")
+        if store.space.band is not None:
+            raise DatasetError("out", f"{out} is a sweep dataset (its space has a [band]); "
+                               "ingest writes single-frequency rows: give another --out")
         return store, space or store.space
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise DatasetError("out", f"{out} exists and is not a hapticrom dataset")
     if space is None:
         raise DatasetError("space", f"{out} does not exist yet: give a space to create it")
+    if space.band is not None:
+        raise DatasetError("space", f"space {space.name!r} has a [band] (rows are sweeps); "
+                           "ingest writes single-frequency rows: give a space without a band")
     return None, space
 
 

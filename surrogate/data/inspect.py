@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -11,17 +12,21 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
+from surrogate.data.output_checks import check_outputs, outputs_summary
 from surrogate.data.provenance import solver_key
 from surrogate.data.space import Space
-from surrogate.data.store import FEM_SOURCE, STATUSES, Store
+from surrogate.data.store import FEM_SOURCE, STATUSES, DatasetWarning, Store
 
-__all__ = ["dataset_info", "merge_datasets", "validate_dataset"]
+__all__ = ["dataset_info", "merge_datasets", "seal_dataset", "validate_dataset"]
 
 def dataset_info(path: str | Path) -> dict[str, Any]:
     """Summary of a dataset: manifest essentials plus counts computed from the parts."""
-    store = Store.open(path)
+    with warnings.catch_warnings():  # reported below, in the summary
+        warnings.simplefilter("ignore", DatasetWarning)
+        store = Store.open(path, deep=True)
     problems = part_problems(store)
     if problems:  # counts over such parts would be wrong
         raise DatasetError(str(store.path), f"{store.path}: {'; '.join(problems)}")
@@ -36,18 +41,24 @@ def dataset_info(path: str | Path) -> dict[str, Any]:
         "solver_versions": sorted({s.get("version", "?") + "+" + s.get("hash", "?")
                                    for s in m.get("solver_history", [])}),
         "analysis_kind": m.get("analysis_kind"), "mesh": m.get("mesh"),
+        "outputs": outputs_summary(m, store.schema.names), "band": m.get("band"),
         "profile_grid_mm": m.get("profile_grid_mm"), **counts,
         "bytes": sum(p.stat().st_size for p in store.parts()),
         "temp_files": len(store.temp_files()),
+        "stray_files": stray_files(store.path, m.get("parts") or {}),
         "runs": len(runs), "interrupted_runs": sum(1 for r in runs if r.get("finished") is None),
         "merged_from": m.get("merged_from"),
     }
 
 
-def validate_dataset(path: str | Path, rehash: bool = False) -> list[str]:
-    """Check a dataset; return a list of problems (empty when valid).
+def validate_dataset(path: str | Path, rehash: bool = False,
+                     notes: list[str] | None = None) -> list[str]:
+    """Check a dataset; return a list of problems (empty when valid); stray files (ignored,
+    not a problem) are appended to ``notes``.
 
-    Checks: every part readable with exactly the dataset schema; no (source, sample_id)
+    Checks: the manifest's part records (every recorded part present, its rows hashing to the
+    recorded digest, no unrecorded ``part-N.parquet``); every part readable with exactly the
+    dataset schema; no (source, sample_id)
     twice; generated rows have unique sample indices (unless merged); statuses are "ok" or
     "failed"; failed rows carry error text; generated ok rows have finite amplitudes and a
     profile on the manifest grid; parameter values lie in the space; each part's solver is
@@ -56,10 +67,16 @@ def validate_dataset(path: str | Path, rehash: bool = False) -> list[str]:
     problems = [f"_manifest.json: {p}" for p in manifest_problems(store)]
     if any("section(s) are missing" in p or "not a valid space" in p for p in problems):
         return problems  # nothing below can be checked against a broken manifest
+    check = check_parts(store, deep=True)
+    problems += check.problems
+    if notes is not None and check.strays:
+        notes.append(f"ignored (not part of the dataset): {', '.join(check.strays)}")
     problems += part_problems(store)
     schema = store.schema
     tables = []
     for part in store.parts():
+        if not part.exists():
+            continue  # a missing recorded part: reported above
         try:
             t = store.read_part(part)
         except DatasetError as err:
@@ -104,11 +121,13 @@ def _check_rows(store: Store, df: Any) -> list[str]:
     if no_error.any():
         problems.append(f"{int(no_error.sum())} failed rows have no error text")
     ok_fem = fem & (df["status"] == "ok")
-    for col in ("edge_amplitude_um", "center_amplitude_um"):
-        vals = df.loc[ok_fem, col].to_numpy(dtype=float)
-        if vals.size and not np.all(np.isfinite(vals)):
-            problems.append(f"generated ok rows with non-finite {col}")
-    problems += _check_profiles(store, df.loc[ok_fem])
+    if not store.manifest.get("band"):  # single-frequency magnitudes
+        for col in ("edge_amplitude_um", "center_amplitude_um"):
+            vals = df.loc[ok_fem, col].to_numpy(dtype=float)
+            if vals.size and not np.all(np.isfinite(vals)):
+                problems.append(f"generated ok rows with non-finite {col}")
+        problems += _check_profiles(store, df.loc[ok_fem])
+    problems += check_outputs(store.manifest, df.loc[ok_fem])
     problems += _check_ranges(store.space, df)
     return problems
 
@@ -211,3 +230,27 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
                 new.write_part(chunk, {"source": "merge"})
     return {"rows_in": table.num_rows, "rows_out": merged.num_rows,
             "duplicates_dropped": table.num_rows - merged.num_rows, "parts": len(new.parts())}
+
+
+def seal_dataset(path: str | Path) -> dict[str, Any]:
+    """Record the part digests of a dataset written before hapticrom recorded them (see
+    :mod:`surrogate.data.digests`), after a full :func:`validate_dataset` finds nothing
+    wrong but their absence; a dataset already sealed is verified and left as it is.
+    Returns ``{"parts", "rows", "sealed"}``; :class:`DatasetError` lists the problems and
+    writes nothing."""
+    store = Store.open(path, check=False)
+    if isinstance(store.manifest.get("parts"), dict):
+        store.verify(deep=True)
+        rows = sum(int(e["rows"]) for e in store.manifest["parts"].values())
+        return {"parts": len(store.manifest["parts"]), "rows": rows, "sealed": False}
+    with store.lock():
+        problems = [p for p in validate_dataset(path)
+                    if "records no part digests" not in p]
+        if problems:
+            raise DatasetError(str(store.path), f"{store.path}: not sealed, fix first: "
+                               f"{'; '.join(problems)}")
+        entries = {p.name: part_entry(p) for p in store.parts()}
+        store.manifest["parts"] = entries
+        store.save_manifest()
+    return {"parts": len(entries), "rows": sum(e["rows"] for e in entries.values()),
+            "sealed": True}

@@ -6,8 +6,9 @@
   none; for them, and in addition for all, the semantic checks below still apply.
 * Semantic checks: every section present; the recorded space hashes to the recorded
   ``space_hash``; the sampling seed is the space's; the current solver is in the history.
-* Parts: no (source, sample_id) in two parts (a copied part file), no part written for
-  another space (each part records the space hash it was written for).
+* Parts: the manifest records every part with a digest of its rows
+  (:mod:`surrogate.data.digests`); in addition no (source, sample_id) is in two parts and no
+  part was written for another space (each part records the space hash it was written for).
 """
 
 from __future__ import annotations
@@ -43,6 +44,9 @@ def manifest_problems(store: Store) -> list[str]:
     problems = []
     if "digest" in m and m["digest"] != manifest_digest(m):
         problems.append("its content does not match its digest: it was edited after it was "
+                        "written")
+    elif "parts" in m and "digest" not in m:
+        problems.append("it records parts but has no digest: it was edited after it was "
                         "written")
     required = REQUIRED_SECTIONS + (GENERATED_SECTIONS if m.get("runs") else ())
     missing = [key for key in required if key not in m]

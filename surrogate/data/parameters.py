@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from fieldspec import REQUIRED, Context, Spec, read_fields, read_table
+from surrogate.data.columns import COMPLEX_FIELDS, SWEEP_FIELDS
 from surrogate.data.errors import SpaceError
 from surrogate.data.scene_paths import parse_path
 
@@ -34,7 +35,7 @@ RESERVED_COLUMNS = frozenset({
     "profile_magnitude_um",
     "history_t_s", "history_r_mm", "history_uz_um", "history_magnitude_um",
     "history_center_um", "history_edge_um",
-})
+}) | {f.name for f in COMPLEX_FIELDS + SWEEP_FIELDS}
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 

@@ -20,7 +20,9 @@ def read_simulate_json(path: str | Path) -> tuple[np.ndarray, np.ndarray, float 
 
     path = Path(path)
     try:
-        doc = read_result(json.loads(path.read_text(encoding="utf-8")))
+        from fieldspec.documents import read_json_file  # size and nesting limits
+
+        doc = read_result(read_json_file(path, DatasetError, "simulate result"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, ValueError) as err:
         raise DatasetError(str(path), f"cannot read simulate result {path}: {err}") from None
     kind = doc["analysis"]["kind"]

@@ -29,6 +29,11 @@ Layout (``datasets/spaces/default.toml`` is a commented example)::
     name = "thin_layers"
     expr = "skin_thickness_mm + fat_thickness_mm <= 15"   # rejected points are skipped
 
+    [band]                           # optional: every row is a sweep over the band
+    start = 100.0                    # Hz (surrogate.data.band)
+    stop = 250.0
+    step = 2.0
+
 Paths: a parameter writes its value at every path in ``path``. Tables or lists missing on the
 way are first taken from the base scene's fully resolved defaults (so ``tissue.layer[1]...``
 edits the default fat layer), otherwise created; lists grow as needed. Filled-in default
@@ -55,7 +60,6 @@ import copy
 import functools
 import hashlib
 import json
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,6 +68,7 @@ from typing import Any
 import numpy as np
 
 from fieldspec import REQUIRED, Context, Spec, read_array, read_table, require_table
+from surrogate.data.band import Band, check_band_parameters, read_band
 from surrogate.data.constraints import Constraint, read_constraint
 from surrogate.data.errors import SpaceError
 from surrogate.data.mesh_plan import MESH_TOPOLOGIES, MeshPlan
@@ -95,6 +100,7 @@ class Space:
     constraints: tuple[Constraint, ...] = ()
     significant_digits: int = SIGNIFICANT_DIGITS
     mesh_topology: str = "per_sample"
+    band: Band | None = None
 
     @functools.cached_property
     def mesh_plan(self) -> MeshPlan:
@@ -176,6 +182,8 @@ class Space:
                     raise SpaceError(f"parameter {p.name}.path",
                                      f"parameter {p.name!r} (path {path!r}): {err}") from None
         _check_no_holes(scene, self)
+        if self.band is not None:
+            self.band.apply(scene)
         return scene
 
     def scene(self, row: Mapping[str, Any]) -> Any:
@@ -226,6 +234,8 @@ class Space:
                              "parameter": [p.to_dict() for p in self.parameters]}
         if self.constraints:
             d["constraint"] = [{"name": c.name, "expr": c.expr} for c in self.constraints]
+        if self.band is not None:  # written only when set: older hashes hold
+            d["band"] = self.band.to_dict()
         return d
 
     def space_hash(self) -> str:
@@ -261,7 +271,7 @@ _SPACE_HEAD = {
     "mesh_topology": Spec(str, "per_sample", choices=MESH_TOPOLOGIES),
     "base_scene": Spec(str, None),
 }
-_FILE_KEYS = ("space", "base", "parameter", "constraint")
+_FILE_KEYS = ("space", "base", "parameter", "constraint", "band")
 
 
 def space_from_dict(d: Mapping[str, Any], base_dir: str | Path | None = None,
@@ -279,6 +289,9 @@ def space_from_dict(d: Mapping[str, Any], base_dir: str | Path | None = None,
     params = tuple(read_array(d["parameter"], "parameter", ctx, lambda raw, _, i:
                               read_parameter(raw, i), noun="parameters"))
     _check_unique(params)
+    band = read_band(d["band"]) if "band" in d else None
+    if band is not None:
+        check_band_parameters(params)
     if not any(p.free for p in params):
         raise SpaceError("parameter", "every parameter is fixed: give at least one continuous, "
                          "integer or categorical parameter")
@@ -289,7 +302,7 @@ def space_from_dict(d: Mapping[str, Any], base_dir: str | Path | None = None,
                   seed=head["seed"], lhs_batch=head["lhs_batch"],
                   description=head["description"], constraints=constraints,
                   significant_digits=head["significant_digits"],
-                  mesh_topology=head["mesh_topology"])
+                  mesh_topology=head["mesh_topology"], band=band)
     if check_scenes:
         check_space(space)
     return space
@@ -306,9 +319,11 @@ def _read_base(d: Mapping[str, Any], head: Mapping[str, Any],
     path = Path(head["base_scene"])
     if not path.is_absolute():
         path = Path(base_dir or ".") / path
+    from fieldspec.documents import read_toml_file
+
     try:
-        scene = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except (OSError, tomllib.TOMLDecodeError) as err:
+        scene = read_toml_file(path, SpaceError, "base scene")
+    except SpaceError as err:
         raise SpaceError("space.base_scene", f"space.base_scene = {str(path)!r}: cannot read "
                          f"it: {err}") from None
     return deep_merge(scene, base)
@@ -388,13 +403,8 @@ def _changes(space: Space, row: Mapping[str, Any], h: str, p: Parameter, alt: np
 
 def load_space(path: str | Path, check_scenes: bool = True) -> Space:
     """Read a space TOML file (see module docstring). Raises :class:`SpaceError`."""
+    from fieldspec.documents import read_toml_file
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as err:
-        raise SpaceError("<file>", f"cannot read space file {str(path)!r}: {err}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpaceError("<file>", f"{path}: invalid TOML: {err}") from None
+    data = read_toml_file(path, SpaceError, "space file")
     return space_from_dict(data, base_dir=path.parent, check_scenes=check_scenes)

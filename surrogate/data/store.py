@@ -8,11 +8,18 @@ Layout::
     DIR/part-000001.parquet     immutable data parts (zstd), written atomically
     DIR/.part-000002.parquet.tmp   a part being written (or left by a killed run)
 
-Readers need one line: ``pandas.read_parquet(DIR)``. pyarrow's dataset discovery ignores
-files whose names start with ``_`` or ``.``, so the manifest, the lock and unfinished
-temporary parts are never read as data. A part is written to its temporary name, flushed to
-disk (fsync) and renamed with ``os.replace``, which is atomic on POSIX: a reader sees either
-no part or a complete one, even after ``kill -9``.
+The dataset is the parts the manifest records (``parts``: rows, a digest of the rows and of
+the file, :mod:`surrogate.data.digests`); every reader (:meth:`Store.open`) checks them and
+refuses a dataset whose parts, rows or manifest do not match, naming the part. Any other file
+in the directory is a stray: reported and never read. Read it with pandas from the manifest's
+list (what :meth:`Store.read` returns)::
+
+    m = json.load(open(f"{DIR}/_manifest.json"))
+    df = pd.concat([pd.read_parquet(f"{DIR}/{name}") for name in sorted(m["parts"])])
+
+A part is written to its temporary name, flushed to disk (fsync), recorded in the manifest
+(the commit point, saved atomically) and renamed with ``os.replace``: a reader sees either no
+part or a complete one, even after ``kill -9``.
 
 Every row carries its provenance: ``sample_id`` (sha256 of the resolved scene,
 ``fem.scene.scene_hash``), ``sample_index`` (position in the design sequence for generated
@@ -21,12 +28,8 @@ rows, row number in the source file for ingested rows), ``status`` ("ok" or "fai
 ``wall_s`` [s], ``dofs``, ``elements``, ``solver_version``, ``solver_hash``, the resolved
 scene as canonical JSON (``scene_json``) and the solver's warnings (``warnings``, e.g. an
 under-resolved mesh; "; "-joined, null if none). Then one column per space parameter, then the
-outputs: center/edge amplitudes [um], normalized edge amplitude [-], the surface profile
-(list columns ``profile_distance_mm``, ``profile_uz_um``, ``profile_magnitude_um``) and, for
-transient scenes, time histories (``history_t_s``, ``history_r_mm`` and per-point lists
-``history_uz_um``, ``history_magnitude_um``; for a unit also ``history_center_um`` and
-``history_edge_um``, each [u_r, u_z, u_theta]). ``edge_radius_mm`` is the unit's outer radius
-(the solver's definition; null for datasets written before it was stored). The key of a row is
+outputs (:mod:`surrogate.data.columns`: magnitudes, complex amplitudes, profiles, transient
+histories, or complex sweeps over a band). The key of a row is
 (source, sample_id).
 """
 
@@ -38,6 +41,7 @@ import datetime as _dt
 import json
 import os
 import re
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -46,6 +50,22 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from surrogate.data.columns import (
+    COMPLEX_FIELDS,
+    OUTPUT_FIELDS,
+    PROVENANCE_FIELDS,
+    arrow_schema,
+    profile_matrix,
+    recorded_schema,
+)
+from surrogate.data.digests import (
+    PART_RE,
+    TMP_RE,
+    check_parts,
+    file_sha256,
+    part_entry,
+    rows_digest,
+)
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_digest, manifest_problems, part_problems
 from surrogate.data.lockfile import exclusive
@@ -54,6 +74,8 @@ from surrogate.data.space import Space, space_from_dict
 __all__ = [
     "FEM_SOURCE",
     "MANIFEST_NAME",
+    "OUTPUT_FIELDS",
+    "PROVENANCE_FIELDS",
     "SCHEMA_VERSION",
     "DatasetError",
     "Store",
@@ -68,54 +90,20 @@ FORMAT = "hapticrom-dataset"
 MANIFEST_NAME = "_manifest.json"
 LOCK_NAME = "_lock"
 FEM_SOURCE = "hapticrom-fem"
-_PART_RE = re.compile(r"^part-(\d{6,})\.parquet$")
-_TMP_RE = re.compile(r"^\.part-(\d{6,})\.parquet\.tmp$")
-_TYPES = {"float64": pa.float64(), "int64": pa.int64(), "string": pa.string(),
-          "bool": pa.bool_()}
-_F64_LIST = pa.list_(pa.float64())
-
-PROVENANCE_FIELDS = [
-    pa.field("sample_id", pa.string(), nullable=False),
-    pa.field("sample_index", pa.int64(), nullable=False),
-    pa.field("status", pa.string(), nullable=False),
-    pa.field("error", pa.string()),
-    pa.field("source", pa.string(), nullable=False),
-    pa.field("wall_s", pa.float64()),
-    pa.field("dofs", pa.int64()),
-    pa.field("elements", pa.int64()),
-    pa.field("solver_version", pa.string()),
-    pa.field("solver_hash", pa.string()),
-    pa.field("scene_json", pa.string()),
-    pa.field("warnings", pa.string()),
-]
-OUTPUT_FIELDS = [
-    pa.field("center_amplitude_um", pa.float64()),
-    pa.field("edge_amplitude_um", pa.float64()),
-    pa.field("normalized_edge", pa.float64()),
-    pa.field("edge_radius_mm", pa.float64()),
-    pa.field("profile_distance_mm", _F64_LIST),
-    pa.field("profile_uz_um", _F64_LIST),
-    pa.field("profile_magnitude_um", _F64_LIST),
-    pa.field("history_t_s", _F64_LIST),
-    pa.field("history_r_mm", _F64_LIST),
-    pa.field("history_uz_um", pa.list_(_F64_LIST)),
-    pa.field("history_magnitude_um", pa.list_(_F64_LIST)),
-    # transient unit runs: [u_r, u_z, u_theta] histories (um) at the center and edge points
-    pa.field("history_center_um", pa.list_(_F64_LIST)),
-    pa.field("history_edge_um", pa.list_(_F64_LIST)),
-]
+_PART_RE, _TMP_RE = PART_RE, TMP_RE
 STATUSES = ("ok", "failed")
+#: Output columns added after datasets were first written: rows for a dataset that predates
+#: them are stored without them.
+_LATER_COLUMNS = frozenset(f.name for f in COMPLEX_FIELDS)
+
+
+class DatasetWarning(UserWarning):
+    """A dataset directory holds files that are not part of the dataset (ignored)."""
 
 
 def utc_now() -> str:
     """Current UTC time, ISO 8601 with seconds."""
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-
-
-def arrow_schema(space: Space) -> pa.Schema:
-    """The fixed Arrow schema of a dataset over ``space``: provenance, parameters, outputs."""
-    params = [pa.field(p.name, _TYPES[p.column_type]) for p in space.parameters]
-    return pa.schema(PROVENANCE_FIELDS + params + OUTPUT_FIELDS)
 
 
 def _fsync_dir(path: Path) -> None:
@@ -160,6 +148,7 @@ class Store:
                 "columns": [{"name": f.name, "type": str(f.type)} for f in arrow_schema(space)]}
         data = {**head, **manifest}
         data.setdefault("runs", [])
+        data["parts"] = {}
         data["digest"] = manifest_digest(data)
         path.mkdir(parents=True, exist_ok=True)
         write_json_atomic(path / MANIFEST_NAME, data)
@@ -168,31 +157,51 @@ class Store:
         return store
 
     @classmethod
-    def open(cls, path: str | Path, check: bool = True) -> Store:
+    def open(cls, path: str | Path, check: bool = True, deep: bool = False) -> Store:
         """Open an existing dataset; :class:`DatasetError` if ``path`` is not one, or (with
-        ``check``) if its manifest was edited (:mod:`surrogate.data.integrity`)."""
+        ``check``) if its manifest was edited (:mod:`surrogate.data.integrity`) or its parts
+        do not match the manifest's record (:meth:`verify`; ``deep``: every part's rows are
+        decoded and hashed, not only the file hashes compared; :meth:`read_table` of all
+        columns checks the rows it reads in any case)."""
         path = Path(path)
         mpath = path / MANIFEST_NAME
         if not mpath.is_file():
             raise DatasetError(str(path), f"{path} is not a hapticrom dataset "
                                f"(no {MANIFEST_NAME})")
-        try:
-            data = json.loads(mpath.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as err:
-            raise DatasetError(str(mpath), f"cannot read {mpath}: {err}") from None
-        if data.get("format") != FORMAT:
-            raise DatasetError(str(mpath), f"{mpath}: format {data.get('format')!r} is not "
+        from fieldspec.documents import read_json_file
+
+        data = read_json_file(mpath, DatasetError, "dataset manifest")
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise DatasetError(str(mpath), f"{mpath}: format "
+                               f"{data.get('format') if isinstance(data, dict) else data!r} is not "
                                f"{FORMAT!r}")
         if data.get("schema_version") != SCHEMA_VERSION:
             raise DatasetError(str(mpath), f"{mpath}: schema_version "
                                f"{data.get('schema_version')!r} is not supported (this "
                                f"version reads {SCHEMA_VERSION})")
         store = cls(path, data)
-        problems = manifest_problems(store) if check else []
+        if check:
+            store.verify(deep=deep)
+        return store
+
+    def verify(self, deep: bool = False) -> list[str]:
+        """Refuse (:class:`DatasetError`, naming the manifest or the part) a dataset whose
+        manifest was edited or whose parts do not match the manifest's record; returns the
+        stray files (ignored, also reported as a :class:`DatasetWarning`)."""
+        mpath = self.path / MANIFEST_NAME
+        problems = manifest_problems(self)
         if problems:
             raise DatasetError(str(mpath), f"{mpath}: {'; '.join(problems)}. Restore the "
                                "manifest, or regenerate the dataset")
-        return store
+        check = check_parts(self, deep=deep)
+        if check.problems:
+            raise DatasetError(str(self.path), f"{self.path}: refused: "
+                               f"{'; '.join(check.problems)}")
+        if check.strays:
+            warnings.warn_explicit(f"{self.path}: ignoring files that are not part of the "
+                                   f"dataset: {', '.join(check.strays)}", DatasetWarning,
+                                   filename="hapticrom", lineno=0)  # no source line shown
+        return check.strays
 
     @classmethod
     def exists(cls, path: str | Path) -> bool:
@@ -212,8 +221,9 @@ class Store:
 
     @property
     def schema(self) -> pa.Schema:
-        """The Arrow schema every part must have."""
-        return arrow_schema(self.space)
+        """The Arrow schema every part must have: the columns the manifest records (a
+        dataset written before a column existed does not have it)."""
+        return recorded_schema(self.space, self.manifest)
 
     def save_manifest(self) -> None:
         """Write the (modified) manifest atomically."""
@@ -231,20 +241,45 @@ class Store:
     # ---- parts
 
     def parts(self) -> list[Path]:
-        """Complete part files, in write order."""
-        found = [(int(m.group(1)), p) for p in self.path.iterdir()
-                 if (m := _PART_RE.match(p.name))]
-        return [p for _, p in sorted(found)]
+        """The dataset's part files in write order: those the manifest records (a recorded
+        part whose rename a killed writer did not finish is read under its temporary name),
+        or, in a dataset written before parts were recorded, every ``part-N.parquet``."""
+        listed = self.manifest.get("parts")
+        if isinstance(listed, Mapping):
+            names = [str(n) for n in listed]
+            paths = [self.part_path(n) or self.path / n for n in names]
+        else:
+            paths = [p for p in self.path.iterdir() if _PART_RE.match(p.name)]
+        return sorted(paths, key=lambda p: int(re.sub(r"\D", "", p.name) or 0))
+
+    def part_path(self, name: str) -> Path | None:
+        """Where the recorded part ``name`` is: its own name, or its temporary name when the
+        writer was killed between recording it and renaming it; None if neither exists."""
+        for p in (self.path / name, self.path / f".{name}.tmp"):
+            if p.is_file():
+                return p
+        return None
 
     def temp_files(self) -> list[Path]:
         """Unfinished parts (ignored by readers)."""
         return sorted(p for p in self.path.iterdir() if _TMP_RE.match(p.name))
 
     def remove_temp_files(self) -> list[Path]:
-        """Delete unfinished parts left by an interrupted writer (call under :meth:`lock`)."""
-        removed = self.temp_files()
-        for p in removed:
+        """Finish the rename of recorded parts a killed writer left under their temporary
+        name, delete the unrecorded ones (never committed); call under :meth:`lock`.
+        Returns the deleted files."""
+        listed = self.manifest.get("parts") or {}
+        removed = []
+        for p in self.temp_files():
+            name = p.name[1:-len(".tmp")]
+            entry = listed.get(name)
+            if entry is not None and not (self.path / name).exists() \
+                    and file_sha256(p) == entry.get("file_sha256"):
+                os.replace(p, self.path / name)
+                continue
             p.unlink(missing_ok=True)
+            removed.append(p)
+        _fsync_dir(self.path)
         return removed
 
     def _next_seq(self) -> int:
@@ -260,6 +295,9 @@ class Store:
         if isinstance(rows, pa.Table):
             table = rows.replace_schema_metadata(None).cast(self.schema)
         else:
+            later = _LATER_COLUMNS - set(self.schema.names)  # an older dataset: not stored
+            if later:
+                rows = [{k: v for k, v in r.items() if k not in later} for r in rows]
             table = rows_to_table(rows, self.schema)
         meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
         table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
@@ -269,6 +307,8 @@ class Store:
         pq.write_table(table, tmp, compression="zstd")
         with open(tmp, "rb") as fh:
             os.fsync(fh.fileno())
+        self.manifest.setdefault("parts", {})[final.name] = part_entry(tmp)
+        self.save_manifest()  # the commit point: the part belongs to the dataset from here on
         os.replace(tmp, final)
         _fsync_dir(self.path)
         return final
@@ -283,8 +323,17 @@ class Store:
             raise DatasetError(str(part), f"cannot read part {part}: {err}") from None
 
     def read_table(self, columns: Sequence[str] | None = None) -> pa.Table:
-        """All rows as one Arrow table with the dataset schema."""
+        """All rows as one Arrow table with the dataset schema. Reading every column checks
+        each part's rows against the digest the manifest recorded (:class:`DatasetError`
+        naming the part)."""
         tables = [self.read_part(p, columns) for p in self.parts()]
+        listed = self.manifest.get("parts")
+        if columns is None and isinstance(listed, Mapping):
+            for part, table in zip(self.parts(), tables, strict=True):
+                name = part.name.removeprefix(".").removesuffix(".tmp")
+                if rows_digest(table) != (listed.get(name) or {}).get("rows_sha256"):
+                    raise DatasetError(str(part), f"{self.path}: refused: {name}: its rows "
+                                       "do not match the digest recorded when it was written")
         if not tables:
             schema = self.schema
             if columns:
@@ -352,22 +401,6 @@ def _py(value: Any) -> Any:
     return value
 
 
-def profile_matrix(df: Any, grid_mm: Sequence[float],
-                   column: str = "profile_magnitude_um") -> np.ndarray:
-    """Profiles of every row linearly interpolated onto ``grid_mm`` [mm]: an array of shape
-    (rows, len(grid)) in the column's unit, NaN where a row has no profile or the grid point
-    lies outside that row's distance range (no extrapolation)."""
-    grid = np.asarray(grid_mm, dtype=float)
-    out = np.full((len(df), grid.size), np.nan)
-    for i, (d, a) in enumerate(zip(df["profile_distance_mm"], df[column], strict=True)):
-        if d is None or a is None or len(d) == 0:
-            continue
-        d, a = np.asarray(d, dtype=float), np.asarray(a, dtype=float)
-        inside = (grid >= d.min()) & (grid <= d.max())
-        out[i, inside] = np.interp(grid[inside], d, a)
-    return out
-
-
 def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
     """The manifest entries of a new dataset over ``space`` computed by ``solver`` (a
     :func:`surrogate.data.provenance.solver_info` dict); pass them to :meth:`Store.create`."""
@@ -380,7 +413,10 @@ def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
         "solver_history": [dict(solver, first_used=utc_now())],
         "mesh": {**defaults.get("mesh", {}),
                  "varied_by_space": any(v.startswith("mesh.") for v in varied)},
-        "analysis_kind": ("varied" if "analysis.kind" in varied
+        "analysis_kind": ("sweep" if space.band is not None else "varied"
+                          if "analysis.kind" in varied
                           else defaults.get("analysis", {}).get("kind")),
         "profile_grid_mm": None,
+        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)}}
+           if space.band is not None else {}),
     }

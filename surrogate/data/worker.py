@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.columns import complex_columns, sweep_columns
 from surrogate.data.provenance import solver_info
 
 __all__ = ["edge_radius_mm", "outputs_from_result", "run_chunk", "run_sample",
@@ -30,11 +31,10 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
     Never raises for a bad sample: the exception becomes ``status = "failed"`` with its text.
     The result depends on the scene only."""
     from fem.scene import scene_from_dict
-    from fem.simulation import simulate
 
     t0 = time.perf_counter()
     try:
-        out = outputs_from_result(simulate(scene_from_dict(scene)))
+        out = outputs_from_result(_solve(scene_from_dict(scene)))
         bad = _non_finite(out)
         out["status"], out["error"] = ("failed", f"NonFiniteResult: {bad}") if bad else ("ok",
                                                                                          None)
@@ -42,6 +42,14 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
         out = {"status": "failed", "error": _error_text(err)}
     out["wall_s"] = time.perf_counter() - t0
     return out
+
+
+def _solve(scene: Any) -> Any:
+    """``fem.simulate``: a :class:`fem.simulation.SimulationResult`, or a
+    ``fem.sweep.SweepResult`` for a sweep scene (the reduced-order sweep over its band)."""
+    import fem
+
+    return fem.simulate(scene)
 
 
 def run_chunk(payload: str) -> str:
@@ -61,8 +69,12 @@ def worker_solver_hash() -> str:
 
 def outputs_from_result(res: Any) -> dict[str, Any]:
     """Dataset output columns (amplitudes in um, distances in mm) of a
-    :class:`fem.simulation.SimulationResult`."""
+    :class:`fem.simulation.SimulationResult` (with the complex amplitudes of a harmonic or
+    static result) or of a sweep result (:func:`surrogate.data.columns.sweep_columns`)."""
     from fem.results import magnitude
+
+    if np.ndim(getattr(res, "frequency_hz", 0)) == 1:  # a sweep: one row holds the band
+        return sweep_columns(res)
 
     out: dict[str, Any] = {
         "center_amplitude_um": res.center_amplitude_um,
@@ -77,6 +89,13 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
         "warnings": "; ".join(str(w) for w in res.meta.get("warnings", [])) or None,
     }
     h = res.histories
+    if h is None:  # the harmonic steady state's complex amplitudes (static: real)
+        cols = complex_columns(np.asarray(res.center), np.asarray(res.edge),
+                               np.asarray(res.profile))
+        if res.edge_mm is None:  # a point force: no centre or edge of a unit
+            cols = {k: (None if k.startswith(("center_", "edge_")) else v)
+                    for k, v in cols.items()}
+        out.update(cols)
     if h is not None:
         probes = h.radii[: res.r_mm.size]
         out["history_t_s"] = h.t.tolist()

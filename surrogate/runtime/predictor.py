@@ -22,12 +22,13 @@ from typing import Any
 import numpy as np
 import onnxruntime as ort
 
-from surrogate.runtime.card import ModelFileError, read_card
+from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
 from surrogate.runtime.encoding import (
     InputSpec,
     PredictorInputError,
     compile_specs,
     encode,
+    n_features,
     parse_inputs,
 )
 
@@ -47,6 +48,7 @@ def make_session(model: bytes | str | Path, threads: int = 1) -> ort.InferenceSe
     opts.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
     opts.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
     opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
+    opts.log_severity_level = 4  # a failure is raised (and named by the loader), not logged
     src = model if isinstance(model, bytes) else str(model)
     return ort.InferenceSession(src, sess_options=opts, providers=["CPUExecutionProvider"])
 
@@ -119,10 +121,65 @@ class Predictor:
         return out
 
 
+def _session(path: Path, name: str, data: bytes) -> ort.InferenceSession:
+    """An onnxruntime session of the graph bytes ``data`` (never a path: a graph's external
+    data or custom-op library cannot be fetched from elsewhere); any failure is a refusal
+    naming the file."""
+    try:
+        return make_session(data)
+    except Exception as err:  # onnxruntime raises its own classes (InvalidProtobuf, Fail, ...)
+        text = str(err).strip().splitlines()[0][:300] if str(err).strip() else ""
+        raise ModelFileError(name, f"{path / name}: not an ONNX graph this runtime can run "
+                             f"(check: graph; {type(err).__name__}: {text})") from None
+
+
+def _check_graph(path: Path, name: str, card: dict[str, Any],
+                 session: ort.InferenceSession, width: int, n_out: int) -> None:
+    """The graph's contract: one input ``x`` (batch, width) of the card's dtype and outputs
+    ``log_mean`` and ``log_std`` of (batch, n_out), checked on one row."""
+    where = f"{path / name}: the graph does not match the card (check: graph contract; "
+    inputs = session.get_inputs()
+    if [i.name for i in inputs] != ["x"]:
+        raise ModelFileError(name, where + f"inputs {[i.name for i in inputs]}, expected "
+                             "['x'])")
+    outs = {o.name for o in session.get_outputs()}
+    if not {"log_mean", "log_std"} <= outs:
+        raise ModelFileError(name, where + f"outputs {sorted(outs)}, expected log_mean and "
+                             "log_std)")
+    try:
+        mean, std = session.run(["log_mean", "log_std"],
+                                {"x": np.zeros((1, width), _DTYPES[card["graph"]["dtype"]])})
+    except Exception as err:
+        raise ModelFileError(name, where + f"one row of {width} features fails: "
+                             f"{type(err).__name__})") from None
+    for label, arr in (("log_mean", mean), ("log_std", std)):
+        if np.shape(arr) != (1, n_out):
+            raise ModelFileError(name, where + f"{label} has shape {np.shape(arr)} for one "
+                                 f"row, expected (1, {n_out}))")
+
+
 def load_predictor(path: str | Path) -> Predictor:
-    """Load ``models/NAME/`` (verifying the sha256 of every file) as a :class:`Predictor`."""
-    card = read_card(path)
-    graph = card.get("graph", {})
-    if graph.get("dtype") not in _DTYPES or "file" not in graph:
-        raise ModelFileError("graph", f"{path}: card has no usable 'graph' entry")
-    return Predictor(card, make_session(Path(path) / graph["file"]))
+    """Load ``models/NAME/`` as a :class:`Predictor`, after verifying the directory as a whole
+    (:func:`surrogate.runtime.card.verify_model_dir`) and the graph against the card; any
+    failure is a :class:`ModelFileError` naming the file and the check."""
+    root = Path(path)
+    card = read_card(root)
+    if "graph" not in card:  # the steady-state contract, whatever the kind's name
+        raise ModelFileError("kind", f"{root / CARD_NAME}: a {card.get('kind')!r} model, not "
+                             "a steady-state predictor (no ONNX graph)")
+    graph = card["graph"]
+    if not isinstance(graph, dict) or graph.get("dtype") not in _DTYPES:
+        raise ModelFileError("graph", f"{root / CARD_NAME}: graph.dtype must be one of "
+                             f"{sorted(_DTYPES)} (check: keys)")
+    name = graph["file"]
+    session = _session(root, name, read_model_file(root, card, name))
+    try:
+        predictor = Predictor(card, session)
+        width = n_features(predictor.specs)
+    except ModelFileError:
+        raise
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
+        raise ModelFileError(CARD_NAME, f"{root / CARD_NAME}: malformed card "
+                             f"(check: card values; {type(err).__name__}: {err})") from None
+    _check_graph(root, name, card, session, width, 3 + predictor.profile_distance_mm.size)
+    return predictor

@@ -32,7 +32,6 @@ largest trained envelope) stops with :class:`RomBlowUpError` naming the time.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -42,7 +41,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from surrogate.runtime.card import read_card
+from fieldspec.documents import loads_json, read_json_file
+from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
+from surrogate.runtime.rom_checks import check_spec, finite
 
 __all__ = [
     "FORMAT",
@@ -358,6 +359,7 @@ def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
     if d.get("format") != FORMAT:
         raise ValueError(f"format: expected {FORMAT!r}, got {d.get('format')!r}")
     spec = dict(d["spec"])
+    check_spec(spec)
     nd = len(spec["design"]) + len(spec.get("interactions", []))
     blocks = []
     for i, blk in enumerate(d["blocks"]):
@@ -367,9 +369,18 @@ def model_from_dict(d: Mapping[str, Any]) -> EnvelopeModel:
             if arr.shape != shape or not np.all(np.isfinite(arr)):
                 raise ValueError(f"blocks[{i}].{key}: need finite values of shape {shape}, "
                                  f"got {arr.shape}")
+        if blk["point"] not in ("center", "edge"):
+            raise ValueError(f"blocks[{i}].point: {blk['point']!r} is not center or edge")
         blocks.append(Block(str(blk["point"]), str(blk["component"]), *arrays))
-    model = EnvelopeModel(tuple(blocks), spec, MotorConstants(**d["motor"]),
-                          float(d["bound_um"]))
+    motor = MotorConstants(**{k: finite(f"motor.{k}", v) for k, v in d["motor"].items()})
+    if not 0 <= motor.start_voltage_V < motor.rated_voltage_V <= motor.max_voltage_V \
+            or motor.rated_frequency_hz <= 0:
+        raise ValueError(f"motor: need 0 <= start < rated <= max voltage and a positive "
+                         f"rated frequency, got {d['motor']}")
+    bound = finite("bound_um", d["bound_um"])
+    if bound <= 0:
+        raise ValueError(f"bound_um: need > 0, got {bound}")
+    model = EnvelopeModel(tuple(blocks), spec, motor, bound)
     rate = model.max_growth_rate(design_grid(model))
     if rate >= 0.0:
         raise RomBlowUpError(f"the model's linear part is unstable: an eigenvalue of A(d) + "
@@ -390,13 +401,29 @@ def design_grid(model: EnvelopeModel) -> NDArray:
 
 
 def load_envelope_model(path: str | Path) -> EnvelopeModel:
-    """Load a ROM from a ``models/NAME/`` directory (its card names the coefficients file;
-    every file's sha256 is verified, :func:`surrogate.runtime.card.read_card`) or from a
-    coefficients JSON file."""
+    """Load a ROM from a ``models/NAME/`` directory (verified as a whole,
+    :func:`surrogate.runtime.card.verify_model_dir`; its card names the coefficients file) or
+    from a coefficients JSON file. A malformed file is a :class:`ModelFileError` naming it;
+    an unstable model a :class:`RomBlowUpError`."""
     p = Path(path)
     if p.is_dir():
         card = read_card(p)
         if card.get("kind") != "rom":
-            raise ValueError(f"{p}: a {card.get('kind')!r} model, not a transient ROM")
-        p = p / card["coefficients"]
-    return model_from_dict(json.loads(p.read_text()))
+            raise ModelFileError("kind", f"{p / CARD_NAME}: a {card.get('kind')!r} model, not "
+                                 "a transient ROM")
+        name = card["coefficients"]
+        where = p / name
+        text = read_model_file(p, card, name).decode("utf-8", errors="replace")
+        data = loads_json(text, where, ModelFileError)
+    else:
+        where, name = p, p.name
+        data = read_json_file(p, ModelFileError, "ROM coefficients file")
+    if not isinstance(data, Mapping):
+        raise ModelFileError(name, f"{where}: not a JSON object (check: coefficients)")
+    try:
+        return model_from_dict(data)
+    except RomBlowUpError:
+        raise
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
+        raise ModelFileError(name, f"{where}: malformed coefficients (check: coefficients; "
+                             f"{type(err).__name__}: {err})") from None

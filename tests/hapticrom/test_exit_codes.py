@@ -41,6 +41,7 @@ def test_help_is_0_and_a_missing_command_is_2(capsys):
     ["refine", "{tmp}/none"],
     ["predict", "models/nn-default", "--set", "no_such_input=1"],
     ["models", "show", "{tmp}/none"],
+    ["calibrate", "missing.csv", "--fit", "skin_E_kPa", "--out", "{tmp}/cal.json"],
     ["plan", "missing.toml"],
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "log",
      "--out", "{tmp}/play"],
@@ -58,7 +59,8 @@ def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
 
 def test_every_command_has_a_bad_input_case_above():
     covered = {"simulate", "reproduce", "generate", "dataset", "ingest", "train", "refine",
-               "predict", "models", "plan", "play", "emulate", "bench", "explore"}
+               "predict", "models", "calibrate", "plan", "play", "emulate", "bench",
+               "explore"}
     assert covered == set(COMMANDS)
 
 

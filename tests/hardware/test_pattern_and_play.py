@@ -164,7 +164,8 @@ def test_cli_sim_writes_png_and_gif(tmp_path, capsys):
                        "[[step]]\nsites = [3, 1]\nintensity = 0.5\nduration_ms = 60.0\n")
     out = tmp_path / "play"
     assert main(["play", str(plan), str(pattern), "--device", "sim", "--out", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["field-peak.png", "field.gif"]
+    assert sorted(p.name for p in out.iterdir()) == [".hapticrom-output.json", "field-peak.png",
+                                                     "field.gif"]
     assert (out / "field-peak.png").read_bytes()[:4] == b"\x89PNG"
     assert (out / "field.gif").read_bytes()[:6] == b"GIF89a"
     assert "A(8)" in capsys.readouterr().out

@@ -84,11 +84,11 @@ def test_a_copied_part_is_found_by_generate_info_and_validate(dataset):
 
     parts = Store.open(dataset).parts()
     shutil.copy(parts[0], dataset / "part-000009.parquet")
-    with pytest.raises(DatasetError, match=r"part-000009\.parquet repeats 4 sample"):
+    with pytest.raises(DatasetError, match=r"part-000009\.parquet is not recorded"):
         generate(space_from_dict(SPACE), 8, dataset, workers=1, progress=False)
-    with pytest.raises(DatasetError, match="repeats 4 sample"):
+    with pytest.raises(DatasetError, match=r"part-000009\.parquet is not recorded"):
         dataset_info(dataset)
-    assert any("part-000009.parquet repeats 4 sample(s) of part-000001.parquet" in p
+    assert any("part-000009.parquet is not recorded in the manifest" in p
                for p in validate_dataset(dataset))
 
 
@@ -105,11 +105,12 @@ def test_a_part_of_another_space_is_foreign(dataset, tmp_path):
     with store.lock():
         store.write_part(store.read_table())  # records the other space's hash
     shutil.copy(store.parts()[-1], dataset / "part-000009.parquet")
-    assert any("part-000009.parquet was written for another space" in p
+    assert any("part-000009.parquet is not recorded in the manifest" in p
                for p in validate_dataset(dataset))
 
 
-def test_the_shipped_dataset_predates_the_digest_and_still_opens():
+def test_the_shipped_dataset_is_sealed_and_opens():
     m = json.loads((SHIPPED / MANIFEST_NAME).read_text())
-    assert "digest" not in m  # legacy: the semantic checks apply
+    assert m["digest"] == manifest_digest(m)
+    assert sorted(m["parts"]) == [p.name for p in sorted(SHIPPED.glob("part-*.parquet"))]
     Store.open(SHIPPED)

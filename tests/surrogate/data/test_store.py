@@ -96,10 +96,12 @@ def test_round_trip_through_one_line_of_pandas(tmp_path: Path) -> None:
 
 
 def test_reserved_names_are_exactly_the_store_columns() -> None:
+    from surrogate.data.columns import COMPLEX_FIELDS, SWEEP_FIELDS
     from surrogate.data.parameters import RESERVED_COLUMNS
     from surrogate.data.store import OUTPUT_FIELDS, PROVENANCE_FIELDS
 
-    assert {f.name for f in PROVENANCE_FIELDS + OUTPUT_FIELDS} == RESERVED_COLUMNS
+    assert {f.name for f in PROVENANCE_FIELDS + OUTPUT_FIELDS + COMPLEX_FIELDS
+            + SWEEP_FIELDS} == RESERVED_COLUMNS
 
 
 def test_parts_are_numbered_and_temp_files_removed(tmp_path: Path) -> None:

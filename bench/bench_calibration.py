@@ -1,0 +1,169 @@
+"""The calibration proven on synthetic subjects: coverage, error and run time (issue 25, item 4).
+
+    .venv/bin/python bench/bench_calibration.py [--subjects 50] [--model models/nn-default]
+
+Each of the FE subjects cached in bench/data/calibration-subjects.json (known tissue drawn
+across the model's range, one of the paper's three prototypes, 1-3 frequencies; made by
+bench/calibration_subjects.py) is measured twice, at 5 % and at 10 % noise, with a sensor
+layout of 5-10 points (the unit's face or not, distances from the edge on the 1 mm grid) at
+each of its frequencies, then calibrated for skin_E_kPa, fat_thickness_mm and
+tissue_loss_factor with the defaults of ``hapticrom calibrate``. Printed per input: how often
+the 95 % interval holds the true value (all calibrations, and those where the input is
+reported as determined), how often it is determined, the median absolute error of the
+posterior mean, and the run time per calibration. Everything is seeded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from calibration import calibrate, surrogate_std_factor
+from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM
+from calibration.synthetic import synthetic_measurement
+from surrogate.runtime import load_predictor
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE = ROOT / "bench" / "data" / "calibration-subjects.json"
+#: other FE subjects (bench/calibration_subjects.py --n 30 --seed 7 --out THIS): the surrogate's
+#: error structure is measured on these, not on the study's subjects
+RESIDUAL_CACHE = ROOT / "bench" / "data" / "calibration-residual-subjects.json"
+FIT = ("skin_E_kPa", "fat_thickness_mm", "tissue_loss_factor")
+NOISES = (0.05, 0.10)
+
+
+def run(subjects: list[dict], predictor, *, component: str = "magnitude",
+        steps: int = 1000, std_factor: float | None = None, quiet: bool = False,
+        **likelihood: float) -> list[dict]:
+    """One record per (subject, noise): truth, posterior summary, run time."""
+    records = []
+    for s in subjects:
+        for noise in NOISES:
+            rng = np.random.default_rng(1000 * int(s["id"]) + round(100 * noise))
+            m = synthetic_measurement(s, rel_noise=noise, n_points=int(rng.integers(5, 11)),
+                                      rng=rng, component=component)
+            t0 = time.perf_counter()
+            cal = calibrate(predictor, m, FIT, steps=steps, burn=steps // 3, seed=int(s["id"]),
+                            std_factor=std_factor, **likelihood)
+            summary = cal.summary()
+            wall = time.perf_counter() - t0
+            records.append({"id": s["id"], "noise": noise, "points": len(m.points),
+                            "truth": s["truth"], "summary": summary, "wall_s": wall})
+            if not quiet:
+                inside = "".join("y" if sm["ci95"][0] <= s["truth"][n] <= sm["ci95"][1] else "n"
+                                 for n, sm in summary.items())
+                print(f"  subject {s['id']:3d} noise {noise:.0%} {len(m.points):3d} points "
+                      f"inside {inside} {wall:5.1f} s", flush=True)
+    return records
+
+
+def table(records: list[dict]) -> list[str]:
+    """The summary lines per fitted input and noise level."""
+    lines = [f"{'input':20s} {'noise':>5s} {'n':>4s} {'coverage':>9s} {'determined':>10s} "
+             f"{'cov. det.':>9s} {'med |err|':>10s} {'med |err|/range':>15s}"]
+    ranges = {"skin_E_kPa": 100.0, "fat_thickness_mm": 17.0, "tissue_loss_factor": 0.4}
+    for name in FIT:
+        for noise in (*NOISES, None):
+            rs = [r for r in records if noise is None or r["noise"] == noise]
+            inside = [r["summary"][name]["ci95"][0] <= r["truth"][name]
+                      <= r["summary"][name]["ci95"][1] for r in rs]
+            det = [r["summary"][name]["identifiable"] for r in rs]
+            cov_det = [i for i, d in zip(inside, det, strict=True) if d]
+            err = [abs(r["summary"][name]["mean"] - r["truth"][name]) for r in rs]
+            label = "all" if noise is None else f"{noise:.0%}"
+            lines.append(f"{name:20s} {label:>5s} {len(rs):4d} {np.mean(inside):9.1%} "
+                         f"{np.mean(det):10.1%} "
+                         f"{(np.mean(cov_det) if cov_det else float('nan')):9.1%} "
+                         f"{statistics.median(err):10.4g} "
+                         f"{statistics.median(err) / ranges[name]:15.1%}")
+    walls = [r["wall_s"] for r in records]
+    lines.append(f"run time per calibration: median {statistics.median(walls):.1f} s, max "
+                 f"{max(walls):.1f} s ({len(records)} calibrations)")
+    return lines
+
+
+def residuals(subjects: list[dict], predictor) -> list[str]:
+    """The surrogate's error against FE at the true inputs: its size in units of the predictive
+    log-std (the factor k the likelihood needs), and its correlation along the profile and
+    across frequencies, each fitted with an exponential (calibration.fit's ERROR_* values)."""
+    res, z, freq, subj = [], [], [], []
+    for s in subjects:
+        for i, f in enumerate(s["frequencies_hz"]):
+            X = {k: np.array([v]) for k, v in {**s["design"], **s["truth"]}.items()}
+            X["frequency_hz"] = np.array([f])
+            o = predictor.predict(X)
+            fe = np.r_[s["centre_um"]["magnitude"][i], s["profile_um"]["magnitude"][i]]
+            sur = np.r_[o["center_amplitude_um"][0], o["profile_um"][0]]
+            sd = np.r_[o["center_amplitude_um_log_std"][0], o["profile_um_log_std"][0]]
+            res.append(np.log(fe / sur))
+            z.append(np.log(fe / sur) / sd)
+            freq.append(f)
+            subj.append(s["id"])
+    R, Z = np.array(res), np.array(z)
+    grid = np.asarray(subjects[0]["profile_distance_mm"])
+    C = np.corrcoef(R[:, 1:].T)
+    lags = np.arange(1, 11)
+    rho_d = np.array([np.mean(np.diagonal(C, offset=int(lag))) for lag in lags])
+    length = -1.0 / np.polyfit(lags * (grid[1] - grid[0]), np.log(np.clip(rho_d, 1e-3, 1)),
+                               1)[0]
+    pairs = [(R[a, 1:], R[b, 1:], abs(freq[a] - freq[b])) for a in range(len(R))
+             for b in range(a + 1, len(R)) if subj[a] == subj[b]]
+    df = np.array([p[2] for p in pairs])
+    rho_f = np.array([np.corrcoef(p[0], p[1])[0, 1] for p in pairs])
+    fit_f = -1.0 / np.polyfit(np.r_[0.0, df], np.log(np.clip(np.r_[1.0, rho_f], 1e-2, 1)),
+                              1)[0] if pairs else float("nan")
+    k = float(np.sqrt(np.mean(Z ** 2)))
+    return [f"surrogate error at the true inputs, {len(R)} FE solves of {len(subjects)} subjects:",
+            f"  rms ln(FE/surrogate) {np.sqrt(np.mean(R ** 2)):.3f}; rms in units of its "
+            f"log-std {k:.2f} (card-based factor {surrogate_std_factor(predictor.card):.2f})",
+            "  correlation along the profile at lags 1-10 mm: "
+            + " ".join(f"{r:.2f}" for r in rho_d) + f" -> length {length:.1f} mm",
+            f"  correlation between frequencies of one subject ({len(pairs)} pairs, "
+            f"|df| {df.min() if pairs else 0:g}-{df.max() if pairs else 0:g} Hz) -> scale "
+            f"{fit_f:.0f} Hz",
+            "  centre vs profile correlation "
+            + f"{np.mean(np.corrcoef(R.T)[0, 1:]):.2f} (mean over the profile)"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--subjects", type=int, default=50, help="first N cached subjects")
+    ap.add_argument("--model", default=str(ROOT / "models" / "nn-default"))
+    ap.add_argument("--component", default="magnitude", choices=("magnitude", "normal"),
+                    help="what the synthetic sensor sees (normal: needs a model with a "
+                    "normal-component output)")
+    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--std-factor", type=float, default=None)
+    ap.add_argument("--error-length-mm", type=float, default=ERROR_LENGTH_MM,
+                    help="correlation length of the surrogate's error along the profile "
+                    "(tiny: independent errors)")
+    ap.add_argument("--error-frequency-hz", type=float, default=ERROR_FREQUENCY_HZ)
+    ap.add_argument("--json", type=Path, help="write the records")
+    ap.add_argument("--residuals", action="store_true",
+                    help="only measure the surrogate's error structure on the residual subjects")
+    args = ap.parse_args()
+    predictor = load_predictor(args.model)
+    if args.residuals:
+        print("\n".join(residuals(json.loads(RESIDUAL_CACHE.read_text())["subjects"],
+                                  predictor)))
+        return
+    subjects = json.loads(CACHE.read_text())["subjects"][: args.subjects]
+    t0 = time.perf_counter()
+    records = run(subjects, predictor, component=args.component, steps=args.steps,
+                  std_factor=args.std_factor, error_length_mm=args.error_length_mm,
+                  error_frequency_hz=args.error_frequency_hz)
+    print(f"{len(subjects)} FE subjects x {len(NOISES)} noise levels, model "
+          f"{predictor.card.get('name')}, component {args.component}, "
+          f"{time.perf_counter() - t0:.0f} s in all")
+    print("\n".join(table(records)))
+    if args.json:
+        args.json.write_text(json.dumps(records, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()

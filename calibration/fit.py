@@ -1,0 +1,209 @@
+"""The Bayesian fit: the posterior of chosen tissue inputs given a measurement, sampled with
+emcee's ensemble sampler on the run-time surrogate.
+
+Likelihood (docs/calibration.md): each measured amplitude y_i (peak displacement [m], converted
+by :mod:`calibration.measurement`) is log-normal about the surrogate's prediction mu_i(theta),
+
+    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s(theta)) C diag(s(theta))),
+
+with sigma_i the stated standard uncertainty (independent between points), s_i the
+surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened by ``k`` =
+:func:`surrogate_std_factor` where the model card's held-out coverage shows the bounds too
+narrow, and C the correlation of the surrogate's errors between points
+(:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
+too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
+
+Sampling: ``walkers`` walkers started at the best of ``n_init`` prior draws (one vectorised
+surrogate call), differential-evolution moves (emcee's DEMove 0.8 / DESnookerMove 0.2: robust
+for the correlated, sometimes bimodal posteriors of decay data), ``steps`` steps of which the
+first ``burn`` are dropped. Everything is seeded: the same input gives the same posterior.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from calibration.forward import ForwardModel
+from calibration.measurement import Measurement
+from calibration.priors import Prior, PriorError, priors_for
+
+__all__ = ["IDENTIFIABLE_WIDTH_RATIO", "Calibration", "calibrate", "surrogate_std_factor"]
+
+#: a parameter whose 95 % posterior interval is wider than this fraction of its prior's 95 %
+#: interval (in the sampling coordinate) is reported as not determined by the data
+IDENTIFIABLE_WIDTH_RATIO = 0.8
+Z95 = 1.959964
+KEPT_SAMPLES = 400  # posterior draws stored in the calibration document
+#: correlation of the surrogate's errors along the profile [mm] and across frequencies [Hz]
+#: (measured by bench/bench_calibration.py --residuals on FE solves apart from the study's)
+ERROR_LENGTH_MM = 20.0
+ERROR_FREQUENCY_HZ = 60.0
+
+
+def surrogate_std_factor(card: Mapping[str, Any]) -> float:
+    """How much to widen the surrogate's log-std so its 95 % bounds cover 95 %: from the card's
+    held-out ``coverage95`` of the amplitude outputs (the smallest), the factor 1.96 / z with
+    z the normal quantile that coverage implies; 1 when the card has none or covers well."""
+    cov = [v.get("coverage95") for k, v in card.get("metrics", {}).items()
+           if isinstance(v, dict) and k.endswith("_um")]
+    cov = [c for c in cov if isinstance(c, int | float) and 0.0 < c < 0.95]
+    if not cov:
+        return 1.0
+    from statistics import NormalDist
+
+    z = NormalDist().inv_cdf(0.5 + 0.5 * min(cov))
+    return float(Z95 / z)
+
+
+@dataclass
+class Calibration:
+    """A fitted posterior and everything the document and the figure need."""
+
+    measurement: Measurement
+    forward: ForwardModel
+    priors: list[Prior]
+    samples: np.ndarray  # (n, k) posterior draws, model units
+    log_prob: np.ndarray  # (n,)
+    std_factor: float
+    sampler: dict[str, Any] = field(default_factory=dict)
+    error_length_mm: float = ERROR_LENGTH_MM
+    error_frequency_hz: float = ERROR_FREQUENCY_HZ
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.forward.fit
+
+    def z_samples(self) -> np.ndarray:
+        return np.column_stack([p.to_z(self.samples[:, j]) for j, p in enumerate(self.priors)])
+
+    def summary(self, rng_seed: int = 0) -> dict[str, dict[str, Any]]:
+        """Per parameter: mean, median, sd, 95 % interval (2.5-97.5 percentiles), the prior's
+        95 % interval, the width ratio (in the sampling coordinate) and identifiability."""
+        rng = np.random.default_rng(rng_seed)
+        z = self.z_samples()
+        out = {}
+        for j, p in enumerate(self.priors):
+            x = self.samples[:, j]
+            prior_z = p.sample_z(20000, rng)
+            pw = np.subtract(*np.percentile(prior_z, [97.5, 2.5]))
+            qw = np.subtract(*np.percentile(z[:, j], [97.5, 2.5]))
+            ratio = float(qw / pw) if pw > 0 else math.inf
+            out[p.name] = {
+                "unit": p.unit, "mean": float(x.mean()), "median": float(np.median(x)),
+                "sd": float(x.std(ddof=1)),
+                "ci95": [float(v) for v in np.percentile(x, [2.5, 97.5])],
+                "prior_ci95": [float(v) for v in p.from_z(np.percentile(prior_z, [2.5, 97.5]))],
+                "width_ratio": ratio, "identifiable": ratio <= IDENTIFIABLE_WIDTH_RATIO}
+        return out
+
+    def correlation(self) -> np.ndarray:
+        """Posterior correlation matrix (sampling coordinate)."""
+        k = len(self.priors)
+        if k == 1:
+            return np.ones((1, 1))
+        return np.corrcoef(self.z_samples(), rowvar=False)
+
+    def mean_inputs(self) -> dict[str, float]:
+        """Posterior means in model units (the point estimate written as the tissue)."""
+        return {n: float(self.samples[:, j].mean()) for j, n in enumerate(self.names)}
+
+    def predictive(self, n: int = 200, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Posterior predictive of the measured points: (ln mean draws (n, m), total log-std
+        of the surrogate (n, m)) at ``n`` posterior draws."""
+        rng = np.random.default_rng(seed)
+        pick = rng.choice(len(self.samples), size=min(n, len(self.samples)), replace=False)
+        mean, std = self.forward.predict(self.samples[pick])
+        return mean, self.std_factor * std
+
+
+def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
+                    k: float, corr: np.ndarray) -> np.ndarray:
+    """Gaussian log-likelihood of ln y for each row of ``mean``/``std`` (n, m): covariance
+    diag(rel^2) + k^2 diag(std) corr diag(std), one batched Cholesky factorisation."""
+    ks = k * std
+    cov = ks[:, :, None] * corr[None, :, :] * ks[:, None, :]
+    cov[:, np.arange(y.size), np.arange(y.size)] += rel ** 2
+    chol = np.linalg.cholesky(cov)
+    r = (y - mean)[:, :, None]
+    w = np.linalg.solve(chol, r)[:, :, 0]
+    logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
+    return -0.5 * (np.sum(w ** 2, axis=1) + logdet + y.size * np.log(2 * np.pi))
+
+
+def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
+              priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
+              walkers: int = 32, steps: int = 1000, burn: int = 333, n_init: int = 4096,
+              seed: int = 0, std_factor: float | None = None,
+              error_length_mm: float = ERROR_LENGTH_MM,
+              error_frequency_hz: float = ERROR_FREQUENCY_HZ) -> Calibration:
+    """Sample the posterior of the inputs ``fit`` (model input names) given ``measurement``.
+
+    Inputs not fitted come from ``fixed``, then the measurement's ``site`` and ``design``
+    (model units); a model input with no value is an error naming it. ``priors``: given priors
+    (``NAME=KIND:A,B``), the rest default (:mod:`calibration.priors`)."""
+    if not 0 <= burn < steps:
+        raise PriorError("steps", f"steps {steps} must exceed burn {burn} >= 0")
+    prs = priors_for(fit, predictor.specs, priors)
+    values = {**measurement.design, **measurement.site, **(fixed or {})}
+    # a fitted input that also has a value (a site. line): the fit wins, the value is a guess
+    given = {k: v for k, v in values.items() if k not in fit}
+    missing = [n for n in predictor.input_names if n not in given and n not in fit
+               and n != "frequency_hz"]
+    unknown = [k for k in given if k not in predictor.input_names]
+    if unknown:
+        raise PriorError(unknown[0], f"{unknown[0]}: not an input of the model (inputs: "
+                         f"{', '.join(predictor.input_names)})")
+    if missing:
+        raise PriorError(missing[0], f"{missing[0]}: no value for this model input; give it in "
+                         "the measurement file ('# design.NAME = ...' or '# site.NAME = ...'), "
+                         "with --set NAME=VALUE, or fit it")
+    fwd = ForwardModel(predictor, measurement, [p.name for p in prs], given)
+    k = surrogate_std_factor(predictor.card) if std_factor is None else std_factor
+    y, rel = fwd.y, fwd.rel_sigma
+    corr = fwd.error_correlation(error_length_mm, error_frequency_hz)
+
+    def log_post(z: np.ndarray) -> np.ndarray:
+        z = np.atleast_2d(z)
+        lp = np.sum([p.log_density_z(z[:, j]) for j, p in enumerate(prs)], axis=0)
+        ok = np.isfinite(lp)
+        out = np.full(z.shape[0], -np.inf)
+        if ok.any():
+            x = np.column_stack([p.from_z(z[ok, j]) for j, p in enumerate(prs)])
+            mean, std = fwd.predict(x)
+            out[ok] = lp[ok] + _log_likelihood(mean, std, y, rel, k, corr)
+        return out
+
+    import emcee  # here, so that reading a calibration (the planner) needs numpy only
+
+    rng = np.random.default_rng(seed)
+    t0 = time.perf_counter()
+    z0 = np.column_stack([p.sample_z(n_init, rng) for p in prs])
+    lp0 = log_post(z0)
+    start = z0[np.argsort(lp0)[::-1][:walkers]]
+    sampler = emcee.EnsembleSampler(
+        walkers, len(prs), log_post, vectorize=True,
+        moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
+    sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
+    sampler.run_mcmc(start, steps, progress=False)
+    chain = sampler.get_chain(discard=burn, flat=True)
+    lps = sampler.get_log_prob(discard=burn, flat=True)
+    samples = np.column_stack([p.from_z(chain[:, j]) for j, p in enumerate(prs)])
+    try:
+        tau = sampler.get_autocorr_time(discard=burn, tol=0)
+    except emcee.autocorr.AutocorrError:  # pragma: no cover - tol=0 never raises
+        tau = np.full(len(prs), np.nan)
+    info = {"library": "emcee", "version": emcee.__version__, "walkers": walkers,
+            "steps": steps, "burn": burn, "n_init": n_init, "seed": seed,
+            "moves": "DEMove 0.8, DESnookerMove 0.2",
+            "acceptance_fraction": float(np.mean(sampler.acceptance_fraction)),
+            "autocorr_steps": [float(t) for t in tau],
+            "effective_samples": float(walkers * (steps - burn) / max(np.nanmax(tau), 1.0)),
+            "wall_s": time.perf_counter() - t0}
+    return Calibration(measurement, fwd, prs, samples, lps, k, info, error_length_mm,
+                       error_frequency_hz)

@@ -1,0 +1,206 @@
+"""The forward model of a calibration: tissue parameters in, the surrogate's prediction of every
+measured point out (natural log of the peak displacement amplitude [m] and its predictive
+log-std), on the run-time predictor only.
+
+Which model output a point reads is set by its reference and its component:
+
+* ``centre`` at distance 0: the centre output (the unit's skin-side face at r = 0);
+* ``edge`` at d, or ``centre`` at r >= the unit's edge radius (d = r - edge radius): the
+  profile output at distance d from the edge, log-linearly interpolated on the model's
+  profile grid (its log-std linearly);
+* component ``magnitude``: ``center_amplitude_um`` / ``profile_um``; component ``normal``:
+  the outputs listed in :data:`NORMAL_OUTPUTS` (a model trained on the normal component
+  |U_z| returns them under one of these names). A model without them cannot be calibrated on
+  normal-component points, and the error says so.
+
+Points under the unit (0 < r < edge radius), beyond the profile grid, or at a frequency
+outside the model's range are bad rows of the measurement (:class:`MeasurementError`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from calibration.measurement import Measurement, MeasurementError
+
+__all__ = ["MAGNITUDE_OUTPUTS", "NORMAL_OUTPUTS", "ForwardModel", "outputs_for"]
+
+#: component -> (centre output, profile output) of the predictor
+MAGNITUDE_OUTPUTS = ("center_amplitude_um", "profile_um")
+#: accepted names of normal-component outputs, (centre, profile), first found is used
+NORMAL_OUTPUTS = (("center_normal_um", "profile_normal_um"),
+                  ("center_uz_um", "profile_uz_um"))
+
+
+def outputs_for(component: str, available: Sequence[str]) -> tuple[str, str] | None:
+    """(centre output, profile output) that predict ``component``, or None if the model has
+    none."""
+    if component == "magnitude":
+        return MAGNITUDE_OUTPUTS
+    for pair in NORMAL_OUTPUTS:
+        if all(name in available for name in pair):
+            return pair
+    return None
+
+
+def _interp_weights(grid: np.ndarray, d: float) -> np.ndarray:
+    """Row of linear interpolation weights on ``grid`` at ``d`` (inside the grid)."""
+    w = np.zeros(grid.size)
+    j = int(np.clip(np.searchsorted(grid, d, side="right") - 1, 0, grid.size - 2))
+    t = (d - grid[j]) / (grid[j + 1] - grid[j])
+    w[j], w[j + 1] = 1.0 - t, t
+    return w
+
+
+@dataclass
+class _Group:
+    """The points of one (component) read from the rows of one frequency block."""
+
+    centre_out: str
+    profile_out: str
+    rows: np.ndarray  # predictor row (frequency index) per point
+    centre: np.ndarray  # bool per point: reads the centre output
+    weights: np.ndarray  # (n_points, n_grid) profile interpolation weights
+    index: np.ndarray  # position of each point in the measurement
+
+
+class ForwardModel:
+    """Predict the measured points for many tissue parameter vectors at once.
+
+    ``fit``: names of the model inputs to vary; ``fixed``: every other model input except
+    ``frequency_hz`` (design and known tissue), in the model's units. ``theta`` passed to
+    :meth:`predict` is (n, len(fit)) in the model's units (kPa, mm, ...)."""
+
+    def __init__(self, predictor: Any, measurement: Measurement, fit: Sequence[str],
+                 fixed: Mapping[str, Any]) -> None:
+        self.predictor = predictor
+        self.fit = tuple(fit)
+        self.fixed = dict(fixed)
+        self.measurement = measurement
+        pts = measurement.points
+        self.frequencies_hz = np.array(measurement.frequencies_hz)
+        self.y = np.log(np.array([p.amplitude_m for p in pts]))
+        self.rel_sigma = np.array([p.relative_sigma for p in pts])
+        grid_mm = np.asarray(predictor.profile_distance_mm, dtype=float)
+        self.grid_m = grid_mm * 1e-3
+        # one row at the low end of every fitted range (and of the frequency range): the edge
+        # radius, the output names and the codes of the fixed inputs
+        template = {k: v[:1] for k, v in self._rows(
+            np.array([[predictor.input_ranges[n][0] for n in self.fit]])).items()}
+        if "frequency_hz" in template:
+            template["frequency_hz"] = np.array([predictor.input_ranges["frequency_hz"][0]])
+        out = predictor.predict(template)
+        names = list(predictor.input_names)
+        self._template = predictor.features(template)[0]
+        self._fit_cols = [names.index(n) for n in self.fit]
+        self._freq_col = names.index("frequency_hz") if "frequency_hz" in names else None
+        self.edge_radius_m = float(out["edge_radius_mm"][0]) * 1e-3
+        available = tuple(out)
+        lo_f, hi_f = predictor.input_ranges.get("frequency_hz", (-np.inf, np.inf))
+        errors: list[tuple[str, str]] = []
+        groups: dict[str, list[tuple[int, bool, np.ndarray, int]]] = {}
+        for k, p in enumerate(pts):
+            where = f"row {p.row}"
+            if not lo_f <= p.frequency_hz <= hi_f:
+                errors.append((f"{where}: frequency_hz", f"{where}, column frequency_hz: "
+                               f"{p.frequency_hz:g} Hz is outside the model's range "
+                               f"[{lo_f:g}, {hi_f:g}] Hz"))
+                continue
+            if outputs_for(p.component, available) is None:
+                errors.append((f"{where}: component", f"{where}, column component: the model "
+                               f"{predictor.card.get('name')!r} predicts no normal component "
+                               "(its outputs are magnitudes); give component = magnitude or "
+                               "use a model with a normal-component output "
+                               f"({' / '.join(n[1] for n in NORMAL_OUTPUTS)})"))
+                continue
+            d = p.distance_m - (self.edge_radius_m if p.reference == "centre" else 0.0)
+            at_centre = p.reference == "centre" and p.distance_m == 0.0
+            if not at_centre and not self.grid_m[0] <= d <= self.grid_m[-1] + 1e-12:
+                r_edge = self.edge_radius_m * 1e3
+                allowed = (f"0 (the unit's face) or [{r_edge + grid_mm[0]:g}, "
+                           f"{r_edge + grid_mm[-1]:g}] mm from the centre (edge radius "
+                           f"{r_edge:g} mm)" if p.reference == "centre" else
+                           f"[{grid_mm[0]:g}, {grid_mm[-1]:g}] mm from the edge")
+                errors.append((f"{where}: distance_mm", f"{where}, column distance_mm: "
+                               f"{p.distance_m * 1e3:g} mm is outside the model's profile; "
+                               f"allowed: {allowed}"))
+                continue
+            w = (np.zeros(grid_mm.size) if at_centre else
+                 _interp_weights(self.grid_m, min(d, self.grid_m[-1])))
+            row = int(np.searchsorted(self.frequencies_hz, p.frequency_hz))
+            groups.setdefault(p.component, []).append((row, at_centre, w, k))
+        if errors:
+            lines = "\n  ".join(m for _, m in errors[:25])
+            raise MeasurementError(errors[0][0], f"{measurement.source or 'measurement'}: "
+                                   f"{len(errors)} row(s) the model cannot predict:\n  {lines}")
+        self.groups = []
+        for component, items in groups.items():
+            c_out, p_out = outputs_for(component, available)  # type: ignore[misc]
+            self.groups.append(_Group(
+                c_out, p_out, np.array([i[0] for i in items]), np.array([i[1] for i in items]),
+                np.array([i[2] for i in items]), np.array([i[3] for i in items])))
+
+    def error_correlation(self, length_mm: float, frequency_scale_hz: float) -> np.ndarray:
+        """(m, m) correlation of the surrogate's errors between the measured points: along
+        the profile exp(-|d_i - d_j| / length_mm), between frequencies
+        exp(-|f_i - f_j| / frequency_scale_hz), none between the unit's face and the profile
+        (see docs/calibration.md for how these were measured)."""
+        m = self.y.size
+        d = np.zeros(m)
+        face = np.zeros(m, dtype=bool)
+        f = np.array([p.frequency_hz for p in self.measurement.points])
+        for g in self.groups:
+            d[g.index] = g.weights @ (self.grid_m * 1e3)
+            face[g.index] = g.centre
+        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length_mm)
+        same = face[:, None] == face[None, :]
+        rho = np.where(same, np.where(face[:, None], 1.0, rho_d), 0.0)
+        return rho * np.exp(-np.abs(f[:, None] - f[None, :]) / frequency_scale_hz)
+
+    def _rows(self, theta: np.ndarray) -> dict[str, np.ndarray]:
+        """Predictor inputs by name: one row per (parameter vector, frequency), frequency
+        fastest (the first call, which also finds the model's codes of the fixed inputs)."""
+        n, nf = theta.shape[0], self.frequencies_hz.size
+        X: dict[str, np.ndarray] = {k: np.full(n * nf, v) if not isinstance(v, str)
+                                    else np.array([v] * (n * nf)) for k, v in self.fixed.items()}
+        for j, name in enumerate(self.fit):
+            X[name] = np.repeat(theta[:, j], nf)
+        if "frequency_hz" in self.predictor.input_names:
+            X["frequency_hz"] = np.tile(self.frequencies_hz, n)
+        return X
+
+    def _codes(self, theta: np.ndarray) -> np.ndarray:
+        """The same rows as the (n * n_f, d) code array of the predictor's inputs (fixed
+        inputs coded once), which the predictor checks and encodes without per-name work."""
+        n, nf = theta.shape[0], self.frequencies_hz.size
+        codes = np.repeat(self._template, n * nf, axis=0)
+        for j, col in enumerate(self._fit_cols):
+            codes[:, col] = np.repeat(theta[:, j], nf)
+        if self._freq_col is not None:
+            codes[:, self._freq_col] = np.tile(self.frequencies_hz, n)
+        return codes
+
+    def predict(self, theta: np.ndarray, *, extrapolate: bool = False
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """(ln amplitude [m], predictive log-std), each (n, n_points), for parameter vectors
+        ``theta`` (n, len(fit)) in the model's units."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        n, nf = theta.shape[0], self.frequencies_hz.size
+        out = self.predictor.predict(self._codes(theta), extrapolate=extrapolate)
+        mean = np.empty((n, self.y.size))
+        std = np.empty((n, self.y.size))
+        for g in self.groups:
+            lc = np.log(out[g.centre_out].reshape(n, nf) * 1e-6)
+            sc = out[f"{g.centre_out}_log_std"].reshape(n, nf)
+            lp = np.log(out[g.profile_out].reshape(n, nf, -1) * 1e-6)
+            sp = out[f"{g.profile_out}_log_std"].reshape(n, nf, -1)
+            # per point: its frequency row, then the interpolation weights on the grid
+            pm = np.einsum("npg,pg->np", lp[:, g.rows, :], g.weights)
+            ps = np.einsum("npg,pg->np", sp[:, g.rows, :], g.weights)
+            mean[:, g.index] = np.where(g.centre, lc[:, g.rows], pm)
+            std[:, g.index] = np.where(g.centre, sc[:, g.rows], ps)
+        return mean, std
