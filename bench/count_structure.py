@@ -2,6 +2,7 @@
 
     python bench/count_structure.py            # the table
     python bench/count_structure.py --list     # every hit, file:line
+    python bench/count_structure.py --root ../other-checkout
 
 Counted over the project's packages (tests, bench, examples and embed are left out):
 
@@ -33,8 +34,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("fieldspec", "figstyle", "fem", "surrogate", "studies", "planner", "hardware",
-            "hapticrom")
+PACKAGES = ("fieldspec", "figstyle", "fem", "surrogate", "studies", "planner", "calibration",
+            "hardware", "hapticrom")
 SURROGATE_KINDS = frozenset({"gp", "nn", "rom", "mlp"})
 DEVICE_KINDS = frozenset({"sim", "log", "serial"})
 REGISTRIES = frozenset({"surrogate/kinds.py", "hardware/backends.py"})
@@ -44,8 +45,9 @@ __all__ = ["circles", "counts", "function_imports", "kind_switches", "own_field_
 
 
 def source_files(root: Path = ROOT) -> list[Path]:
-    """Every ``.py`` file of the project's packages, sorted."""
-    return sorted(p for pkg in PACKAGES for p in (root / pkg).rglob("*.py"))
+    """Every ``.py`` file of the project's packages (those present under ``root``), sorted."""
+    return sorted(p for pkg in PACKAGES if (root / pkg).is_dir()
+                  for p in (root / pkg).rglob("*.py"))
 
 
 def _rel(path: Path, root: Path) -> str:
@@ -237,21 +239,24 @@ def main(argv: list[str] | None = None) -> int:
     """Print the table (``--list``: every hit too)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--list", action="store_true", help="print every hit, file:line")
+    parser.add_argument("--root", type=Path, default=ROOT,
+                        help="checkout to measure (default: this one)")
     args = parser.parse_args(argv)
-    for name, value in counts().items():
+    root = args.root.resolve()
+    for name, value in counts(root).items():
         print(f"{name:24s} {value}")
     if args.list:
         print("\n# kind switches")
-        for f, line, kind in kind_switches():
+        for f, line, kind in kind_switches(root):
             print(f"{f}:{line} {kind}")
         print("\n# function-level imports")
-        for f, line, func, mod in function_imports():
+        for f, line, func, mod in function_imports(root):
             print(f"{f}:{line} {func}: {mod}")
         print("\n# circles")
-        for group in circles():
+        for group in circles(root):
             print(" <-> ".join(group))
         print("\n# ValueError errors")
-        for f, line, name, own in own_field_errors():
+        for f, line, name, own in own_field_errors(root):
             print(f"{f}:{line} {name}" + (" (own .field)" if own else ""))
     return 0
 

@@ -14,11 +14,19 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 __all__ = ["SurrogateKind"]
 
 
 def _no_extras(estimator: Any) -> dict[str, Any]:
     return {}
+
+
+def _predict_log(estimator: Any, B: np.ndarray, b: np.ndarray) -> Callable[[np.ndarray],
+                                                                            np.ndarray]:
+    """The in-memory model's log outputs: ``estimator.predict(X) @ B + b``."""
+    return lambda X: estimator.predict(X) @ B + b
 
 
 def steady_report(card: Mapping[str, Any]) -> list[str]:
@@ -50,6 +58,10 @@ class SurrogateKind:
         trainer: for a kind with its own pipeline: ``trainer(paths, out, *, seed, overwrite,
             options) -> card`` replaces the steady-state pipeline of :mod:`surrogate.train`.
         report: the lines ``hapticrom train`` prints of the card.
+        engine: what runs the estimator in memory (``"scikit-learn"``, ``"torch"``), for the
+            accuracy study's labels.
+        in_memory: ``in_memory(estimator, B, b) -> f(X) -> log outputs``, the fastest
+            in-memory path (the accuracy study times it beside the ONNX graph).
     """
 
     name: str
@@ -63,3 +75,5 @@ class SurrogateKind:
     card_extras: Callable[[Any], dict[str, Any]] = field(default=_no_extras)
     trainer: Callable[..., dict[str, Any]] | None = None
     report: Callable[[Mapping[str, Any]], list[str]] = field(default=steady_report)
+    engine: str = "scikit-learn"
+    in_memory: Callable[..., Callable[[np.ndarray], np.ndarray]] = field(default=_predict_log)

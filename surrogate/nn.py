@@ -229,8 +229,20 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
             best_epoch.tolist())
 
 
+def _in_memory(est: MLPEnsembleRegressor, B: np.ndarray,
+               b: np.ndarray) -> Any:
+    """The ensemble's torch module with the output map, float32 in, log outputs out."""
+    module = est.to_module(B, b)
+
+    def run(X: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return module(torch.as_tensor(X, dtype=torch.float32))[0].double().numpy()
+
+    return run
+
+
 #: float32 graph of the ensemble; its std is the members' spread, compared through the mean.
 KIND = SurrogateKind(
     name="nn", summary="MLP ensemble in torch with the members' spread as std (harmonic "
     "amplitudes)", estimator=MLPEnsembleRegressor, export=export_nn, parity_tol=1e-4,
-    dtype="float32")
+    dtype="float32", engine="torch", in_memory=_in_memory)

@@ -1,5 +1,6 @@
 """What a learned model costs to get: held-out error against the number of FE samples and
-against total compute (generation + training), for the GP and the NN.
+against total compute (generation + training), for every kind the study trains (GP, NN and
+the scikit-learn MLP baseline by default; :func:`curves`).
 
 Each size n trains on the first n training rows of the shipped dataset in its Sobol design
 order (what a dataset of n samples would hold) and is measured on all held-out rows (the split
@@ -25,16 +26,29 @@ from surrogate.pod import ProfileTargets
 from .designs import StudyData
 from .metric import Answer, answer_from_log, errors, summary
 
-__all__ = ["GP_SIZES", "NN_SIZES", "Fitted", "curve", "fit", "heldout_errors", "samples_for"]
+__all__ = ["GP_SIZES", "NN_SIZES", "RUNTIME_KIND", "Fitted", "curve", "curves", "fit",
+           "heldout_errors", "samples_for"]
 
-#: Training sizes (FE samples). The GP stops at 500 rows, the size of the shipped gp-default
-#: (its O(n^3) fit takes tens of seconds there); the NN goes to every training row.
+#: Training sizes (FE samples) and options of each kind the study trains. The GP stops at 500
+#: rows, the size of the shipped gp-default (its O(n^3) fit takes tens of seconds there); the
+#: NN and the MLP baseline go to every training row.
 GP_SIZES = (64, 128, 256, 500)
 NN_SIZES = (256, 512, 1024, 3277)
 GP_SIZES_QUICK = (32, 64)
 NN_SIZES_QUICK = (64, 128)
 #: NN options of ``--quick`` (a smoke test of the pipeline, not a converged model).
 NN_QUICK_OPTIONS = {"max_epochs": 30, "n_members": 2}
+MLP_QUICK_OPTIONS = {"max_iter": 200}
+#: The kind also timed through the full run-time predictor.
+RUNTIME_KIND = "nn"
+
+
+def curves(quick: bool) -> dict[str, tuple[tuple[int, ...], dict[str, Any]]]:
+    """Kind -> (training sizes, options) of a full or a ``quick`` run."""
+    if quick:
+        return {"gp": (GP_SIZES_QUICK, {}), "nn": (NN_SIZES_QUICK, dict(NN_QUICK_OPTIONS)),
+                "mlp": (NN_SIZES_QUICK, dict(MLP_QUICK_OPTIONS))}
+    return {"gp": (GP_SIZES, {}), "nn": (NN_SIZES, {}), "mlp": (NN_SIZES, {})}
 
 
 @dataclass
