@@ -14,12 +14,10 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from .paper import COMMON, LETTERS, TABLE2_DENSITY, TABLE3_E_KPA, TABLE4_NU
-
-if TYPE_CHECKING:
-    from .run import Solved
+from .solved import Solved
 
 #: The prototype scenes the cases start from, shipped as package data.
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"

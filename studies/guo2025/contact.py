@@ -9,7 +9,7 @@ from collections.abc import Mapping, Sequence
 from .cases import RING_CONTACTS, Context, contact_name, is_posed, posed_text, refused_kinds
 from .checks import readings
 from .paper import LETTERS, PAPER_POGO_RATIO, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct, um, verdict
 
 

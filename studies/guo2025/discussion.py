@@ -9,7 +9,7 @@ import numpy as np
 from .cases import BARE, MOTOR_VARIANTS, Context
 from .checks import readings
 from .paper import LETTERS, PAPER_POGO_RATIO, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .studies import rotor_mm, sweep_label
 from .text import REL_TOL, Section, near, pct, um
 

@@ -11,7 +11,7 @@ from fem import SOLVER_VERSION
 from .cases import RING_CONTACTS, TRIPLE, Case, Context, case_scene, is_posed, refused_kinds
 from .contact import CONTACT_DEFS, closest_text
 from .paper import LETTERS, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct
 
 COMMAND = "hapticrom reproduce --out reports/reproduce"

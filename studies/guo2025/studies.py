@@ -33,7 +33,7 @@ from .paper import (
     PAPER_TRIPLE_MAX,
     PAPER_TRIPLE_MIN,
 )
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct, um, verdict
 
 # --------------------------------------------------------------------------- studies
