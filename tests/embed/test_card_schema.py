@@ -8,7 +8,7 @@ import importlib.util
 import json
 
 import pytest
-from conftest import REPO, seal_copy
+from embed_cases import REPO, seal_copy
 
 from hapticrom.documents import schema
 

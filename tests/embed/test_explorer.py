@@ -11,7 +11,7 @@ import threading
 
 import numpy as np
 import pytest
-from conftest import EMBED, columns, random_designs
+from embed_cases import EMBED, columns, random_designs
 
 from hapticrom.commands.explore import build_explorer, make_server
 from surrogate.runtime import load_predictor
@@ -99,7 +99,7 @@ def test_array_preview_follows_the_planner(page):
 def test_explore_refuses_an_unsealed_or_non_predictor_model(tmp_path, capsys):
     import shutil
 
-    from conftest import REPO
+    from embed_cases import REPO
 
     from hapticrom.cli import main
 
@@ -111,7 +111,7 @@ def test_explore_refuses_an_unsealed_or_non_predictor_model(tmp_path, capsys):
     site = tmp_path / "site"
     assert main(["explore", str(unsealed), "--build-only", "--out", str(site)]) == 2
     assert "card_sha256" in capsys.readouterr().err
-    from conftest import seal_copy
+    from embed_cases import seal_copy
 
     rom = seal_copy("rom-default", tmp_path)
     assert main(["explore", str(rom), "--build-only", "--out", str(site)]) == 2

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import EMBED, columns, random_designs
+from embed_cases import EMBED, columns, random_designs
 
 from surrogate.runtime import PredictorInputError, load_predictor
 
@@ -108,7 +108,7 @@ def test_node_refuses_a_damaged_model(node, sealed, tmp_path, damage):
     elif damage == "unsealed":
         del card["card_sha256"]
     else:  # a listed name that leaves the directory, resealed so only the name is wrong
-        from conftest import canonical_sha256
+        from embed_cases import canonical_sha256
 
         card["files"] = {"../nn-default/model.onnx": card["files"]["model.onnx"]}
         card["card_sha256"] = canonical_sha256(card)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import contextlib
 import io
 
-from conftest import REPO
+from embed_cases import REPO
 
 
 def test_readme_python_lines_run():

@@ -26,7 +26,8 @@ def play(tmp_path, plan: dict, pattern: str = PATTERN, *extra: str, device: str 
     pat = tmp_path / "p.toml"
     pat.write_text(pattern)
     out = tmp_path / "out"
-    rc = main(["play", str(path), str(pat), "--device", device, "--out", str(out), *extra])
+    rc = main(["play", str(path), str(pat), "--device", device, "--out", str(out),
+               "--overwrite", *extra])  # each call replaces the previous play's output
     log = out / "commands.jsonl"
     return rc, [json.loads(x) for x in log.read_text().splitlines()] if log.exists() else []
 

@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import json
 
-from hw_cases import line_plan
+from hw_cases import line_plan, sealed
 
 from hapticrom.cli import main
 
 
 def _inputs(tmp_path):
     plan = tmp_path / "plan.json"
-    plan.write_text(json.dumps(line_plan()))
+    plan.write_text(json.dumps(sealed(line_plan())))
     pattern = tmp_path / "p.toml"
     pattern.write_text("[[step]]\nsites = [0, 2]\nduration_ms = 60.0\n")
     return plan, pattern
