@@ -25,6 +25,7 @@ import numpy as np
 import onnx
 from onnx import helper, numpy_helper
 from scipy.linalg import solve_triangular
+from sklearn.gaussian_process.kernels import RBF, Matern
 
 __all__ = ["MAX_IR_VERSION", "export_gp", "export_nn", "finish_model", "set_metadata"]
 
@@ -54,6 +55,7 @@ def finish_model(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
 def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
               metadata: Mapping[str, Any]) -> bytes:
     """ONNX bytes of a fitted :class:`surrogate.nn.MLPEnsembleRegressor` (float32 input)."""
+    # Lazy: torch costs 3.9 s to import; the GP's paths (surrogate.refine) need none of it.
     import torch
 
     module = estimator.to_module(B, b)
@@ -70,8 +72,6 @@ def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
 
 def _gp_parts(gp: Any) -> dict[str, Any]:
     """Constants of a fitted ``amplitude * ARD(rbf|matern52) + white`` GaussianProcessRegressor."""
-    from sklearn.gaussian_process.kernels import RBF, Matern
-
     k = gp.kernel_
     amp, core, noise = k.k1.k1.constant_value, k.k1.k2, k.k2.noise_level
     if isinstance(core, Matern) and core.nu == 2.5:

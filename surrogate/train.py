@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 
-from surrogate import kinds
 from surrogate.data.store import Store, profile_matrix
 from surrogate.data.worker import edge_radius_mm
 from surrogate.features import codes_from_frame, input_specs
@@ -188,7 +187,11 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
           options: dict[str, Any] | None = None) -> dict[str, Any]:
     """Train a ``kind`` model (a name of :data:`surrogate.kinds.KINDS`) on ``paths``, write
     ``out``; return its card."""
-    spec = kinds.get(kind)
+    # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
+    # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
+    from surrogate.kinds import get as get_kind
+
+    spec = get_kind(kind)
     if spec.trainer is not None:
         return spec.trainer(paths, out, seed=seed, overwrite=overwrite,
                             options=dict(options or {}))

@@ -18,6 +18,7 @@ import functools
 import json
 import shutil
 import subprocess
+import webbrowser
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, ClassVar
@@ -111,8 +112,6 @@ def _run(args: argparse.Namespace) -> int:
     url = f"http://{args.host}:{server.server_address[1]}/"
     print(f"serving the design explorer at {url} (Ctrl-C to stop)", flush=True)
     if args.open:
-        import webbrowser
-
         webbrowser.open(url)
     try:
         server.serve_forever()

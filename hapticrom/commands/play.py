@@ -26,7 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from fieldspec import FieldError
 from hapticrom.commands._args import number_in
+from hapticrom.documents import schema
 from hapticrom.outputs import check_dir_output, check_not_input, write_dir
 
 __all__ = ["register"]
@@ -97,7 +99,6 @@ def _play(kind: Any, dev: Any, args: argparse.Namespace, plan: Any, schedule: An
           meter: Any) -> BaseException | None:
     """Run the session on ``dev``; a refusal or an interruption is recorded on the device and
     returned (the caller decides what is kept); anything else propagates."""
-    from fieldspec import FieldError
     from hardware import Heartbeat
     from hardware.device import PlaybackInterrupted
 
@@ -148,7 +149,6 @@ def _live(kind: Any, args: argparse.Namespace, plan: Any, schedule: Any, meter: 
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hapticrom.documents import schema
     from hardware import ExposureMeter, build_schedule, load_pattern, load_plan, open_device
     from hardware.backends import device_kind
 

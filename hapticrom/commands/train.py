@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import argparse
 
+from fieldspec import FieldError
+from fieldspec.documents import loads_json
+from hapticrom.outputs import check_dir_output
+
 __all__ = ["register"]
 
 
 def _options(text: str | None) -> dict:
-    from fieldspec import FieldError
-    from fieldspec.documents import loads_json  # nesting limits
-
     try:
         options = loads_json(text, "--options", FieldError) if text else {}
     except FieldError as err:
@@ -29,8 +30,6 @@ def _options(text: str | None) -> dict:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hapticrom.outputs import check_dir_output
-
     # Lazy: the registry loads scikit-learn, torch and pysindy (about 5 s measured with
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.

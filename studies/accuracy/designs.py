@@ -17,6 +17,10 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.store import Store
+from surrogate.runtime.encoding import encode
+from surrogate.train import load_datasets, split
+
 __all__ = ["DATASET", "N_DESIGNS", "N_QUICK", "Design", "StudyData", "load_study_data",
            "pick_designs"]
 
@@ -53,10 +57,6 @@ class StudyData:
 
 def load_study_data(path: str | Path = DATASET) -> StudyData:
     """Read ``path`` with the training loader and the columns the study needs beside it."""
-    from surrogate.data.store import Store
-    from surrogate.runtime.encoding import encode
-    from surrogate.train import load_datasets, split
-
     data = load_datasets([path])
     df = Store.open(path).read(columns=["sample_id", "sample_index", "status", "wall_s",
                                         "scene_json"])

@@ -11,6 +11,7 @@ import platform
 from typing import Any
 
 import figstyle
+from surrogate.registry import package_versions
 
 from .designs import DATASET
 from .fe_ladder import TRANSIENT
@@ -24,8 +25,6 @@ TARGET = 0.01
 
 def machine() -> dict[str, str]:
     """CPU model, cores, load, OS, Python and package versions of this run."""
-    from surrogate.registry import package_versions
-
     cpu = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo") as f:

@@ -7,6 +7,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from fem import SOLVER_VERSION
+from fem.materials import get_material
+from fem.scene import RING_GAP_MM
 
 from .cases import RING_CONTACTS, TRIPLE, Case, Context, case_scene, is_posed, refused_kinds
 from .contact import CONTACT_DEFS, closest_text
@@ -18,9 +20,6 @@ COMMAND = "hapticrom reproduce --out reports/reproduce"
 
 
 def _model_text(r: Mapping[str, Solved], ctx: Context) -> str:
-    from fem.materials import get_material
-    from fem.scene import RING_GAP_MM
-
     scene, default = ctx.example(TRIPLE), ctx.default
     t, u, mesh = scene.tissue, scene.unit, scene.mesh
     m, pg, b = u.motor, u.pogo, u.board

@@ -10,6 +10,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fem import simulate
+from fem.scene import scene_from_dict, scene_hash
+from surrogate.data.pool import process_map
+
 from .cases import SCENES_DIR, Case, FollowUp, scene_dict
 from .paper import LDV_BAND_HZ
 from .solved import Solved, magnitude
@@ -17,9 +21,6 @@ from .solved import Solved, magnitude
 
 def solve_scene(d: Mapping[str, Any]) -> Solved:
     """Build and solve one scene dict (worker side; plain data in and out)."""
-    from fem import simulate
-    from fem.scene import scene_from_dict
-
     res = simulate(scene_from_dict(d))
     r_mm, surf = res.surface_curve()
     transient = None if res.histories is None else _transient_summary(res)
@@ -99,9 +100,6 @@ def run_cases(cases: Mapping[str, Case], workers: int | None, scenes_dir: Path =
     ``follow.make`` adds its cases as a second batch. Returns every named case, the follow-up's
     included. ``progress``: a bar with rate and ETA on stderr (when it is a terminal).
     Scripts must call this under ``if __name__ == "__main__":``."""
-    from fem.scene import scene_from_dict, scene_hash
-    from surrogate.data.pool import process_map
-
     if follow is not None and not set(follow.needs) <= set(cases):
         raise ValueError("follow-up needs cases that are not in the plan: "
                          + ", ".join(sorted(set(follow.needs) - set(cases))))

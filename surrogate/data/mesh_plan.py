@@ -25,6 +25,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from fem.problem import build_problem
+from fem.scene import SceneError, scene_from_dict
 from surrogate.data.errors import SpaceError
 from surrogate.data.parameters import Parameter
 
@@ -71,9 +73,6 @@ class MeshPlan:
 
     def _domain(self, row: Mapping[str, Any]) -> Any:
         """The discretised body of ``row``'s scene without a plan (``fem.domain.Domain``)."""
-        from fem.problem import build_problem
-        from fem.scene import SceneError, scene_from_dict
-
         try:
             return build_problem(scene_from_dict(self.space.resolve(row))).domain
         except SceneError as err:
