@@ -1,48 +1,50 @@
-"""Coin eccentric-rotating-mass (ERM) motor: spin speed, phase and unbalance force.
+"""Coin eccentric-rotating-mass (ERM) motor: the unbalance force of the transient analysis.
 
-Model (SI units: s, V, rad/s, rad, N, kg m):
+The speed law (steady speed linear in voltage above the start voltage, first-order spin-up and
+spin-down, reverse-drive braking that ends at rest, exact piecewise solution) and its defaults
+are defined once in :mod:`motorlaw` and re-exported here; the run-time envelope model
+(``surrogate.runtime.rom``) calls the same functions. This module adds the rotor's unbalance:
 
-- Steady speed is linear in the drive voltage: 0 at ``start_voltage_V`` (below it stiction
-  holds the rotor), ``rated_frequency_hz`` at ``rated_voltage_V``, extrapolated linearly up to
-  ``max_voltage_V``. A reverse voltage (as in DRV2605 reverse-drive braking) targets the mirror
-  negative speed; the motor is never driven backwards, so the speed is clamped at >= 0 and
-  braking ends at rest.
-- Speed follows first-order DC-motor dynamics towards that target,
-  ``d omega / dt = (omega_target(V) - omega) / tau``, with ``tau = tau_spinup_s`` while
-  ``|omega_target| > omega`` and ``tau_spindown_s`` otherwise (see :func:`speed_rate`).
 - The unbalance force ``F = m_e omega^2`` (``m_e`` = eccentric mass x eccentricity) rotates in
   the plane of the coin: ``(F_x, F_y) = m_e omega^2 (cos phi, sin phi)`` with
   ``phi = integral of omega dt``, phi(0) = 0, counter-clockwise about the coin axis. Amplitude
   and frequency therefore rise together.
-
-For a piecewise-constant voltage the ODE has a closed-form solution on every interval (an
-exponential, with analytic switch times where tau changes or the speed reaches zero), so
-:func:`simulate_speed` and :func:`phase` evaluate it exactly, vectorised over the query
-times; no ODE solver is involved. The motor starts at rest at t = 0.
-
-Default parameters are estimates, not a datasheet: Guo et al. 2025 (Biomimetics 10:597)
-drive a Leader LCM0720A3463F coin ERM at 3.3 V and simulates 120 rev/s. Typical coin ERMs lag
-10-20 ms, rise in 30-100 ms and stop in 50-150 ms. With first-order dynamics the 10-90 % rise
-time is ``tau ln 9 = 2.2 tau`` and the 50 % lag ``tau ln 2``: tau_spinup = 20 ms gives a
-44 ms rise and a 14 ms lag, tau_spindown = 35 ms a 77 ms 90-10 % stop. Dead time
-(electrical lag before the rotor breaks away) is not modelled.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-TWO_PI = 2.0 * math.pi
+from motorlaw import (
+    DEFAULTS,
+    TWO_PI,
+    VoltageSchedule,
+    check_law,
+    phase,
+    rise_time_s,
+    simulate_speed,
+    speed_and_phase,
+    speed_per_volt,
+    speed_rate,
+    steady_frequency_hz,
+    target_speed_rad_s,
+)
+from motorlaw.erm import evaluate, segments
+
+__all__ = ["ERMMotor", "VoltageSchedule", "erm_load_history", "phase", "rise_time_s",
+           "simulate_speed", "speed_rate", "steady_force_N", "steady_frequency_hz",
+           "target_speed_rad_s", "unbalance_force"]
 
 
 @dataclass(frozen=True)
 class ERMMotor:
-    """Coin ERM motor parameters (all values are documented estimates; see module docstring).
+    """Coin ERM motor: the unbalance and the speed law's parameters (:class:`motorlaw.SpeedLaw`;
+    defaults :data:`motorlaw.DEFAULTS`, documented estimates).
 
     Attributes:
         unbalance_kg_m: eccentric mass times eccentricity m*e, kg m (> 0).
@@ -55,89 +57,21 @@ class ERMMotor:
     """
 
     unbalance_kg_m: float
-    rated_voltage_V: float = 3.3
-    rated_frequency_hz: float = 120.0
-    start_voltage_V: float = 0.4
-    tau_spinup_s: float = 0.020
-    tau_spindown_s: float = 0.035
-    max_voltage_V: float = 4.5
+    rated_voltage_V: float = DEFAULTS["rated_voltage_V"]
+    rated_frequency_hz: float = DEFAULTS["rated_frequency_hz"]
+    start_voltage_V: float = DEFAULTS["start_voltage_V"]
+    tau_spinup_s: float = DEFAULTS["tau_spinup_s"]
+    tau_spindown_s: float = DEFAULTS["tau_spindown_s"]
+    max_voltage_V: float = DEFAULTS["max_voltage_V"]
 
     def __post_init__(self) -> None:
-        for name in ("unbalance_kg_m", "rated_frequency_hz", "tau_spinup_s", "tau_spindown_s"):
-            _require(name, getattr(self, name), "(0, inf)", lambda x: x > 0.0)
-        _require("start_voltage_V", self.start_voltage_V, "[0, inf)", lambda x: x >= 0.0)
-        _require("rated_voltage_V", self.rated_voltage_V,
-                 f"(start_voltage_V = {self.start_voltage_V}, inf)",
-                 lambda x: x > self.start_voltage_V)
-        _require("max_voltage_V", self.max_voltage_V,
-                 f"[rated_voltage_V = {self.rated_voltage_V}, inf)",
-                 lambda x: x >= self.rated_voltage_V)
+        _require("unbalance_kg_m", self.unbalance_kg_m)
+        check_law(self)
 
     @property
     def speed_per_volt(self) -> float:
         """Slope of the steady speed above the start voltage, rad/s per V."""
-        return TWO_PI * self.rated_frequency_hz / (self.rated_voltage_V - self.start_voltage_V)
-
-
-@dataclass(frozen=True)
-class VoltageSchedule:
-    """Piecewise-constant drive: ``steps[i] = (t_start_s, volts)`` holds until the next start.
-
-    The first step starts at t = 0 and start times increase strictly; the last step holds
-    forever. Volts may be negative (reverse-drive braking); the motor-specific bound
-    |volts| <= ``ERMMotor.max_voltage_V`` is checked when the schedule is simulated.
-    """
-
-    steps: tuple[tuple[float, float], ...]
-
-    def __post_init__(self) -> None:
-        steps = tuple((float(t), float(v)) for t, v in _as_pairs(self.steps))
-        if not steps:
-            raise ValueError("VoltageSchedule.steps must hold at least one (t_start_s, volts)")
-        times = np.array([t for t, _ in steps])
-        volts = np.array([v for _, v in steps])
-        if not np.all(np.isfinite(times)):
-            raise ValueError(f"VoltageSchedule.steps t_start_s must be finite, got {times}")
-        if not np.all(np.isfinite(volts)):
-            raise ValueError(f"VoltageSchedule.steps volts must be finite, got {volts}")
-        if times[0] != 0.0:
-            raise ValueError(f"VoltageSchedule.steps[0] t_start_s must be 0 s, got {times[0]}")
-        bad = np.flatnonzero(np.diff(times) <= 0.0)
-        if bad.size:
-            i = int(bad[0]) + 1
-            raise ValueError(
-                f"VoltageSchedule.steps t_start_s must increase strictly: steps[{i}] = "
-                f"{times[i]} s is not > steps[{i - 1}] = {times[i - 1]} s"
-            )
-        object.__setattr__(self, "steps", steps)
-
-    @classmethod
-    def constant(cls, volts: float) -> VoltageSchedule:
-        """A single voltage applied from t = 0 on."""
-        return cls(((0.0, volts),))
-
-    @property
-    def start_times_s(self) -> np.ndarray:
-        return np.array([t for t, _ in self.steps])
-
-    @property
-    def volts(self) -> np.ndarray:
-        return np.array([v for _, v in self.steps])
-
-
-def target_speed_rad_s(motor: ERMMotor, volts: float | np.ndarray) -> np.ndarray:
-    """Signed steady speed the motor is driven towards at ``volts``, rad/s.
-
-    Zero for |V| <= start voltage; negative for reverse voltage (a braking target).
-    """
-    v = _check_volts(motor, volts)
-    return np.sign(v) * motor.speed_per_volt * np.maximum(np.abs(v) - motor.start_voltage_V, 0.0)
-
-
-def steady_frequency_hz(motor: ERMMotor, volts: float | np.ndarray) -> np.ndarray | float:
-    """Steady spin frequency at a constant voltage, rev/s (0 for reverse or sub-start voltage)."""
-    out = np.maximum(target_speed_rad_s(motor, volts), 0.0) / TWO_PI
-    return float(out) if np.ndim(out) == 0 else out
+        return speed_per_volt(self)
 
 
 def steady_force_N(motor: ERMMotor, volts: float | np.ndarray) -> np.ndarray | float:
@@ -147,41 +81,10 @@ def steady_force_N(motor: ERMMotor, volts: float | np.ndarray) -> np.ndarray | f
     return float(out) if np.ndim(out) == 0 else out
 
 
-def speed_rate(motor: ERMMotor, volts: float, omega: float) -> float:
-    """Right-hand side of the speed ODE, d omega / dt in rad/s^2, at speed ``omega`` >= 0.
-
-    This is the model that :func:`simulate_speed` solves in closed form; it is exposed for
-    documentation and for checking with a general-purpose ODE solver.
-    """
-    target = float(target_speed_rad_s(motor, volts))
-    if omega <= 0.0 and target <= 0.0:
-        return 0.0  # at rest and not driven forwards: stiction / braking ends at zero
-    tau = motor.tau_spinup_s if abs(target) > omega else motor.tau_spindown_s
-    return (target - omega) / tau
-
-
-def rise_time_s(motor: ERMMotor) -> float:
-    """10-90 % rise time from rest after a constant voltage step, s (= tau_spinup ln 9)."""
-    return motor.tau_spinup_s * math.log(9.0)
-
-
-def simulate_speed(motor: ERMMotor, schedule: VoltageSchedule,
-                   t: float | np.ndarray) -> np.ndarray:
-    """Exact spin speed omega(t), rad/s, for the schedule (motor at rest at t = 0)."""
-    omega, _ = _evaluate(motor, schedule, t)
-    return omega
-
-
-def phase(motor: ERMMotor, schedule: VoltageSchedule, t: float | np.ndarray) -> np.ndarray:
-    """Exact rotor angle phi(t) = integral of omega from 0 to t, rad."""
-    _, phi = _evaluate(motor, schedule, t)
-    return phi
-
-
 def unbalance_force(motor: ERMMotor, schedule: VoltageSchedule,
                     t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """In-plane unbalance force components (F_x, F_y) = m_e omega^2 (cos phi, sin phi), N."""
-    omega, phi = _evaluate(motor, schedule, t)
+    omega, phi = speed_and_phase(motor, schedule, t)
     amplitude = motor.unbalance_kg_m * omega**2
     return amplitude * np.cos(phi), amplitude * np.sin(phi)
 
@@ -193,149 +96,18 @@ def erm_load_history(motor: ERMMotor,
     Returns a function mapping times (nt,) in s to (nt, 2) forces in N: column 0 is F_x
     (apply with the x-direction load vector), column 1 is F_y (apply with the y one).
     """
-    seg = _segments(motor, schedule)  # built (and validated) once, reused for every block
+    seg = segments(motor, schedule)  # built (and validated) once, reused for every block
 
     def history(t: np.ndarray) -> np.ndarray:
-        omega, phi = _evaluate_segments(seg, np.ravel(np.asarray(t, dtype=float)))
+        omega, phi = evaluate(seg, np.ravel(np.asarray(t, dtype=float)))
         amplitude = motor.unbalance_kg_m * omega**2
         return np.column_stack([amplitude * np.cos(phi), amplitude * np.sin(phi)])
 
     return history
 
 
-# ---------------------------------------------------------------- exact piecewise solution
-
-
-@dataclass(frozen=True)
-class _Segments:
-    """Pieces on which omega(t) = T + (w0 - T) exp(-(t - t0) / tau) holds exactly."""
-
-    t0: np.ndarray
-    w0: np.ndarray
-    target: np.ndarray
-    tau: np.ndarray
-    phi0: np.ndarray
-
-
-def _evaluate(motor: ERMMotor, schedule: VoltageSchedule,
-              t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(omega, phi) at times ``t`` (any shape, >= 0 s), vectorised over ``t``."""
-    return _evaluate_segments(_segments(motor, schedule), np.asarray(t, dtype=float))
-
-
-def _evaluate_segments(seg: _Segments, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    if not np.all(np.isfinite(times)) or np.any(times < 0.0):
-        raise ValueError("t must be finite and >= 0 s (the schedule starts at t = 0)")
-    idx = np.searchsorted(seg.t0, times, side="right") - 1
-    s = times - seg.t0[idx]
-    target, tau, excess = seg.target[idx], seg.tau[idx], seg.w0[idx] - seg.target[idx]
-    decay = np.exp(-s / tau)
-    # max(): round-off must not produce a tiny negative speed just before a stop.
-    omega = np.maximum(target + excess * decay, 0.0)
-    phi = seg.phi0[idx] + target * s - excess * tau * np.expm1(-s / tau)
-    return omega, phi
-
-
-def _segments(motor: ERMMotor, schedule: VoltageSchedule) -> _Segments:
-    """Split every constant-voltage interval at tau switches and at the stop."""
-    if not isinstance(schedule, VoltageSchedule):
-        raise TypeError(f"schedule must be a VoltageSchedule, got {type(schedule).__name__}")
-    _check_schedule_volts(motor, schedule)
-    starts = schedule.start_times_s
-    ends = np.append(starts[1:], np.inf)
-    rows: list[tuple[float, float, float, float, float]] = []
-    omega, phi = 0.0, 0.0
-    for start, end, volts in zip(starts, ends, schedule.volts, strict=True):
-        target = float(target_speed_rad_s(motor, volts))
-        t = float(start)
-        for piece_target, tau, duration in _interval_pieces(motor, omega, target):
-            rows.append((t, omega, piece_target, tau, phi))
-            span = min(duration, end - t)
-            if not math.isfinite(span):
-                break
-            omega, phi = _advance(omega, phi, piece_target, tau, span, span == duration)
-            t += span
-            if t >= end:
-                break
-    t0, w0, tgt, tau, phi0 = (np.array(col) for col in zip(*rows, strict=True))
-    return _Segments(t0, w0, tgt, tau, phi0)
-
-
-def _interval_pieces(motor: ERMMotor, omega: float,
-                     target: float) -> list[tuple[float, float, float]]:
-    """(target, tau, duration) pieces for a constant target starting at speed ``omega``.
-
-    The last piece has infinite duration. A positive or zero target is approached
-    monotonically, so tau never changes. A negative (braking) target is approached with
-    tau_spindown while omega >= |target|, then tau_spinup, until omega reaches 0 at a time
-    known in closed form; the speed then stays at rest.
-    """
-    tau_up, tau_down = motor.tau_spinup_s, motor.tau_spindown_s
-    if target >= 0.0:
-        return [(target, tau_up if target > omega else tau_down, math.inf)]
-    rest = (0.0, 1.0, math.inf)  # omega = 0, phi constant (tau irrelevant)
-    if omega <= 0.0:
-        return [rest]
-    pieces = []
-    if omega >= -target:
-        # omega(s) = T + (omega - T) e^{-s/tau_down} reaches |T| = -T at this s:
-        pieces.append((target, tau_down, tau_down * math.log((omega - target) / (-2.0 * target))))
-        omega = -target
-    # ... and reaches 0 with tau_up at this s:
-    pieces.append((target, tau_up, tau_up * math.log((omega - target) / (-target))))
-    pieces.append(rest)
-    return [p for p in pieces if p[2] > 0.0]  # drop zero-length pieces (omega == |target|)
-
-
-def _advance(omega: float, phi: float, target: float, tau: float, span: float,
-             completes: bool) -> tuple[float, float]:
-    """Exact (omega, phi) after ``span`` s on one piece; snaps to the piece's end speed."""
-    excess = omega - target
-    phi_end = phi + target * span - excess * tau * math.expm1(-span / tau)
-    if completes and target < 0.0:
-        # Braking pieces end exactly at |target| (tau switch) or at 0 (stop).
-        end = -target if omega > -target else 0.0
-        return end, phi_end
-    return max(target + excess * math.exp(-span / tau), 0.0), phi_end
-
-
-# ---------------------------------------------------------------- validation helpers
-
-
-def _require(name: str, value: float, allowed: str, ok: Callable[[float], bool]) -> None:
+def _require(name: str, value: float) -> None:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise TypeError(f"ERMMotor.{name} must be a real number in {allowed}, got {value!r}")
-    if not (math.isfinite(value) and ok(float(value))):
-        raise ValueError(f"ERMMotor.{name} must be in {allowed}, got {value!r}")
-
-
-def _check_volts(motor: ERMMotor, volts: float | np.ndarray) -> np.ndarray:
-    v = np.asarray(volts, dtype=float)
-    limit = motor.max_voltage_V
-    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > limit):
-        raise ValueError(
-            f"voltage must be within [-{limit}, {limit}] V (ERMMotor.max_voltage_V), "
-            f"got {volts!r}"
-        )
-    return v
-
-
-def _check_schedule_volts(motor: ERMMotor, schedule: VoltageSchedule) -> None:
-    limit = motor.max_voltage_V
-    for i, (_, volts) in enumerate(schedule.steps):
-        if abs(volts) > limit:
-            raise ValueError(
-                f"VoltageSchedule.steps[{i}] volts = {volts} V is outside [-{limit}, {limit}] V "
-                "(ERMMotor.max_voltage_V)"
-            )
-
-
-def _as_pairs(steps: Iterable[Iterable[float]]) -> list[tuple[float, float]]:
-    try:
-        pairs = [tuple(step) for step in steps]
-    except TypeError as exc:
-        raise TypeError("VoltageSchedule.steps must be a sequence of (t_start_s, volts)") from exc
-    for i, pair in enumerate(pairs):
-        if len(pair) != 2:
-            raise ValueError(f"VoltageSchedule.steps[{i}] must be (t_start_s, volts), got {pair}")
-    return pairs  # type: ignore[return-value]
+        raise TypeError(f"ERMMotor.{name} must be a real number in (0, inf), got {value!r}")
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"ERMMotor.{name} must be in (0, inf), got {value!r}")

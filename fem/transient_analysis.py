@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from motorlaw import DEFAULTS as MOTOR_LAW
+
 from . import elements, linalg, motor
 from .assembly import assemble_matrix, assemble_vector, build_dofmap
 from .problem import Problem, drive_omega
@@ -88,7 +90,8 @@ def load_history(scene: Scene, problem: Problem):
         tau_down = m.tau_spindown_s if problem.effects["spin_up"] else 1e-9
         erm = motor.ERMMotor(m.unbalance_kg_m, m.rated_voltage_V, m.rated_frequency_hz,
                              m.start_voltage_V, tau_up, tau_down,
-                             max(4.5, float(np.max(np.abs([v for _, v in a.voltage_schedule])))))
+                             max(MOTOR_LAW["max_voltage_V"],
+                                 float(np.max(np.abs([v for _, v in a.voltage_schedule])))))
         schedule = motor.VoltageSchedule(a.voltage_schedule_s)
         return motor.erm_load_history(erm, schedule), 2
     # a normal actuator: force amplitude follows the voltage schedule, relative to rated voltage

@@ -3,14 +3,16 @@
 The unit's amplitude field is the plan's: the run-time surrogate's prediction for the chosen
 design at the chosen frequency (:func:`unit_field`, the same :class:`planner.UnitField` the
 planner used; checked against the plan's crosstalk diagonal), one copy centred on each site.
-Each channel's vibration envelope e(t) (1 = the nominal steady amplitude) follows its segment
-levels as a first-order system with the plan's timing: time constant rise_ms / ln 9 while
+Each channel's vibration envelope e(t) (1 = the nominal steady amplitude) is the plan's
+transient model (``surrogate.runtime.rom``, :func:`model_envelopes`) driven by the channel's
+voltage, so what is shown is what the model predicts. A plan that does not name its model's
+design (made before it was recorded) falls back to a first-order system following the segment
+levels with the plan's timing: time constant rise_ms / ln 9 while
 rising and decay_ms / ln 9 while falling (a 10-90 % time of a first-order response is
 tau ln 9); an overdrive kick drives towards its higher level but ends at the nominal amplitude
 (the kick of ERM practice stops when the motor reaches its nominal speed, which is how the
 plan's overdrive_ms is defined), a brake pulse drives towards a negative level, and the
-envelope never goes below 0 (the rotor stops). This is a first-order stand-in for the
-transient model that produced the timing, not that model itself. The skin field is the incoherent
+envelope never goes below 0 (the rotor stops). The skin field is the incoherent
 sum over units, A(x, t) = sqrt(sum_j e_j(t)^2 a_j(x)^2) (independent ERMs, as in the plan).
 
 ``play`` writes ``field-peak.png`` (the field at its peak, and every site's amplitude against
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,7 +35,7 @@ from hardware.safety import ExposureMeter, SafetyLimits
 from hardware.schedule import PlanFile, PlanFileError, Schedule
 from planner.crosstalk import UnitField, crosstalk_matrix
 
-__all__ = ["SimDevice", "envelopes", "field_maps", "unit_field"]
+__all__ = ["SimDevice", "envelopes", "field_maps", "model_envelopes", "unit_field"]
 
 DT_MS = 1.0  # envelope time step [ms]
 MAX_FRAMES = 80  # animation frames at most (the frame interval grows for long patterns)
@@ -96,6 +99,33 @@ def envelopes(segments: list[Segment], n_channels: int, timing: dict[str, float]
     return t, e
 
 
+def model_envelopes(segments: list[Segment], n_channels: int, timing: dict[str, Any],
+                    total_ms: float) -> tuple[NDArray, NDArray] | None:
+    """(t_ms, e) like :func:`envelopes`, rendered by the plan's transient model itself
+    (``timing.model`` driven by each channel's voltage, level x ``nominal_voltage_V``, for the
+    plan's unit ``timing.design``), normalised by the model's steady envelope; None when the
+    plan does not name the model and design (a plan made before they were recorded)."""
+    design, path = timing.get("design"), timing.get("model")
+    if not isinstance(design, dict) or not path:
+        return None
+    from planner.timing import rom_response
+    from surrogate.runtime.rom import load_envelope_model
+
+    model = load_envelope_model(path)
+    respond = rom_response(model, design, extrapolate=True)
+    limit = model.motor.max_voltage_V
+    t = np.arange(0.0, total_ms + 5 * timing["decay_ms"] + DT_MS, DT_MS)
+    volts = np.zeros((n_channels, len(t)))
+    for s in segments:
+        span = (t >= s.t_ms) & (t < s.t_ms + s.duration_ms)
+        volts[s.channel, span] = np.clip(s.level * timing["nominal_voltage_V"], -limit, limit)
+    e = np.zeros_like(volts)
+    for ch in np.flatnonzero(np.any(volts != 0.0, axis=1)):
+        env, _ = respond(1e-3 * t, volts[ch])
+        e[ch] = env / timing["steady_envelope_um"]
+    return t, e
+
+
 def field_maps(unit: UnitField, positions_mm: NDArray,
                n: int = GRID_POINTS) -> tuple[NDArray, NDArray, NDArray]:
     """(x_mm, y_mm, a): each unit's amplitude [um] on an n x n grid, a[j] for unit j (its
@@ -131,7 +161,10 @@ class SimDevice(Device):
         self.levels = levels.copy()
 
     def _play(self, schedule: Schedule, segments: list[Segment]) -> None:
-        t, e = envelopes(segments, self.n_channels, schedule.timing, schedule.total_ms)
+        rendered = model_envelopes(segments, self.n_channels, schedule.timing,
+                                   schedule.total_ms)
+        t, e = rendered or envelopes(segments, self.n_channels, schedule.timing,
+                                     schedule.total_ms)
         x, y, a = field_maps(self.unit, self.positions_mm)
         C = crosstalk_matrix(self.unit, self.positions_mm)
         sites = np.sqrt((C**2) @ e**2)  # amplitude at every site over time [um]

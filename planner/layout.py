@@ -73,6 +73,7 @@ from fieldspec import (
     require_table,
 )
 from fieldspec.toml import read_toml_file
+from motorlaw import DEFAULTS as MOTOR_LAW
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
@@ -131,8 +132,8 @@ class TimingSpec:
 
     enabled: bool = True
     model: str = "models/rom-default"
-    tau_spinup_ms: float = 20.0
-    tau_spindown_ms: float = 35.0
+    tau_spinup_ms: float = 1e3 * MOTOR_LAW["tau_spinup_s"]
+    tau_spindown_ms: float = 1e3 * MOTOR_LAW["tau_spindown_s"]
     isi_fraction: float = 0.1
 
 
@@ -206,12 +207,12 @@ _CRITERION = {"kind": Spec(str, "ratio", choices=KINDS),
               "threshold_um": Spec(tuple, None, "(0, 1e4]"),
               "threshold_source": Spec(str, None),
               "contactor_area_cm2": Spec(float, None, "(0, 100]")}
-# motor time constants: the fem.motor estimates (coin ERMs lag 10-20 ms, stop in 50-150 ms);
+# motor time constants: the motorlaw estimates (coin ERMs lag 10-20 ms, stop in 50-150 ms);
 # isi_fraction 0.1: the 10 % level that also ends the 90-10 % decay time
 _TIMING = {"enabled": Spec(bool, True),
            "model": Spec(str, "models/rom-default"),
-           "tau_spinup_ms": Spec(float, 20.0, "(0, 1000]"),
-           "tau_spindown_ms": Spec(float, 35.0, "(0, 1000]"),
+           "tau_spinup_ms": Spec(float, TimingSpec.tau_spinup_ms, "(0, 1000]"),
+           "tau_spindown_ms": Spec(float, TimingSpec.tau_spindown_ms, "(0, 1000]"),
            "isi_fraction": Spec(float, 0.1, "(0, 1)")}
 _TABLES = ("model", "array", "site", "drive", "criterion", "timing", "design")
 

@@ -23,7 +23,6 @@ from planner.domain import Domain, Extrapolation, build_domain, check_value, dri
 from planner.layout import LayoutError, LayoutRequest, short_repr
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
-from surrogate.runtime.rom import MotorConstants, RomBlowUpError, load_envelope_model
 
 __all__ = ["Prepared", "prepare"]
 
@@ -45,6 +44,8 @@ class Prepared:
 
 
 def _load_rom(req: LayoutRequest) -> Any:
+    from surrogate.runtime.rom import RomBlowUpError, load_envelope_model
+
     try:
         return load_envelope_model(req.timing.model)
     except (OSError, ValueError, KeyError, RomBlowUpError) as err:
@@ -132,6 +133,8 @@ def _designs(req: LayoutRequest, predictor: Any, domain: Domain
 
 def prepare(req: LayoutRequest) -> Prepared:
     """Check the request against its models and predict every candidate (module docstring)."""
+    from surrogate.runtime.rom import MotorConstants
+
     try:
         predictor = load_predictor(req.model)
     except (OSError, ValueError) as err:  # ModelFileError: missing, malformed, altered

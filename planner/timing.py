@@ -21,7 +21,7 @@ speed)`` of the same shape (the tests use a first-order system with a known time
 
 Times are found on a uniform grid of ``dt_s`` (linear interpolation between samples).
 The drive voltage that spins the ERM at the plan's frequency is the inverse of its
-steady-speed law (``MotorConstants``: 120 rev/s at 3.3 V, stiction below 0.4 V, at most
+steady-speed law (:mod:`motorlaw`: 120 rev/s at 3.3 V, stiction below 0.4 V, at most
 4.5 V); a frequency that needs more than the limit has no timing (:class:`TimingError`).
 """
 
@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+import motorlaw
 
 __all__ = ["TIMING_KEYS", "Timing", "TimingError", "envelope_timing", "plan_timing",
            "rom_response", "voltage_for_frequency"]
@@ -77,11 +79,12 @@ class Timing:
 
 
 def voltage_for_frequency(motor: Any, frequency_hz: float) -> float:
-    """Steady drive voltage [V] spinning the ERM (``MotorConstants``) at ``frequency_hz``."""
-    per_hz = (motor.rated_voltage_V - motor.start_voltage_V) / motor.rated_frequency_hz
-    v = motor.start_voltage_V + frequency_hz * per_hz
+    """Steady drive voltage [V] spinning the ERM (a :class:`motorlaw.SpeedLaw`) at
+    ``frequency_hz``: the inverse of the one speed law (:func:`motorlaw.voltage_for_frequency`),
+    refused above the motor's voltage limit."""
+    v = motorlaw.voltage_for_frequency(motor, frequency_hz)
     if v > motor.max_voltage_V:
-        top = (motor.max_voltage_V - motor.start_voltage_V) / per_hz
+        top = motorlaw.max_frequency_hz(motor)
         raise TimingError("frequency_hz", f"{frequency_hz:g} Hz needs {v:.3f} V, above the "
                           f"motor's {motor.max_voltage_V:g} V limit (at most "
                           f"{np.floor(top * 100) / 100:g} Hz)")
@@ -192,12 +195,14 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
                 model: Any = None) -> dict[str, Any]:
     """The ``timing`` object of a plan: :class:`Timing` of the chosen unit (``best``, a
     :class:`planner.optimise.DesignResult`) on the request's ROM, at the voltage that spins
-    the motor at the plan's frequency. The ROM's inputs are taken from the site and design
-    (skin, fat, orientation, attachment) and the request's motor time constants; it has no
-    ring inputs (its training units all carry the paper's three rings), so ring designs share
-    its timing. When the timing cannot be computed, every key is null and ``unavailable``
-    says why. ``model``: the loaded ROM (else loaded from the request). ``extrapolated``
-    lists the ROM inputs outside its trained range (``model.allow_extrapolation``)."""
+    the motor at the plan's frequency. The model's inputs are taken from the site and design
+    (every input of the harmonic model) and the request's motor time constants. The model's
+    inputs (``design``) and the motor's reach at its voltage limit
+    (``max_frequency_hz``) are recorded. When the timing cannot be computed (a frequency
+    above that reach, a design outside the model), every key is null and ``unavailable``
+    says why, with the number. ``model``: the loaded model (else loaded from the
+    request). ``extrapolated`` lists the model's inputs outside its trained range
+    (``model.allow_extrapolation``)."""
     from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
 
     spec = request.timing
@@ -221,6 +226,8 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
         outside = sorted(k for k, v in design.items() if not isinstance(ranges[k][0], str)
                          and not ranges[k][0] <= float(v) <= ranges[k][1])
         extra["extrapolated"] = outside
+        extra["design"] = design
+        extra["max_frequency_hz"] = round(motorlaw.max_frequency_hz(model.motor), 4)
         nominal = voltage_for_frequency(model.motor, best.frequency_hz)
         timing = envelope_timing(rom_response(model, design,
                                               extrapolate=request.allow_extrapolation),

@@ -22,7 +22,7 @@ from surrogate.kind import SurrogateKind
 __all__ = ["KINDS", "STEADY_KINDS", "get"]
 
 #: Options of the envelope model's identification (``--options`` of ``--kind rom``).
-_ROM_OPTIONS = ("threshold",)
+_ROM_OPTIONS = ("harmonic", "max_nfev")
 
 
 def _train_rom(paths: Sequence[str | Path], out: str | Path, *, seed: int, overwrite: bool,

@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from motorlaw import DEFAULTS as MOTOR_LAW
+
 from ..materials import Material
 from .si import Elastic, si_view
 
@@ -59,11 +61,11 @@ class Motor:
     rotor_height_mm: float = 1.4
     E_kPa: float = 5.0e6
     nu: float = 0.3
-    rated_voltage_V: float = 3.3
-    rated_frequency_hz: float = 120.0
-    start_voltage_V: float = 0.4
-    tau_spinup_ms: float = 20.0
-    tau_spindown_ms: float = 35.0
+    rated_voltage_V: float = MOTOR_LAW["rated_voltage_V"]  # the speed law's defaults: motorlaw
+    rated_frequency_hz: float = MOTOR_LAW["rated_frequency_hz"]
+    start_voltage_V: float = MOTOR_LAW["start_voltage_V"]
+    tau_spinup_ms: float = 1e3 * MOTOR_LAW["tau_spinup_s"]
+    tau_spindown_ms: float = 1e3 * MOTOR_LAW["tau_spindown_s"]
 
     radius_m = si_view("diameter_mm", 0.5e-3)
     height_m = si_view("height_mm", 1e-3)

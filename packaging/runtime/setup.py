@@ -12,5 +12,6 @@ if (HERE.parent / "stage.py").is_file():  # in the repository (an unpacked sdist
 
     stage(HERE, [("surrogate/__init__.py", "surrogate/__init__.py"),
                  ("surrogate/runtime", "surrogate/runtime"),
-                 ("planner", "planner"), ("fieldspec", "fieldspec"), ("figstyle", "figstyle")])
+                 ("planner", "planner"), ("fieldspec", "fieldspec"), ("figstyle", "figstyle"),
+                 ("motorlaw", "motorlaw"), ("calibration", "calibration")])
 setup()

@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import motorlaw
+from motorlaw import SpeedLaw
 from planner.timing import (
     TIMING_KEYS,
     TimingError,
@@ -15,7 +17,7 @@ from planner.timing import (
     rom_response,
     voltage_for_frequency,
 )
-from surrogate.runtime.rom import MotorConstants, load_envelope_model
+from surrogate.runtime.rom import load_envelope_model
 
 ROOT = Path(__file__).resolve().parents[2]
 TAU, GAIN, V_NOM, V_MAX, DT = 0.02, 2.0, 3.0, 4.5, 2.5e-4  # s, um/V, V, V, s
@@ -74,18 +76,21 @@ def test_without_headroom_there_is_no_overdrive():
 
 
 def test_voltage_for_frequency_inverts_the_motor_law_and_refuses_beyond_the_limit():
-    m = MotorConstants()
+    m = SpeedLaw()
     v = voltage_for_frequency(m, 100.0)
-    assert m.target_omega(np.array([v]))[0] == pytest.approx(2 * math.pi * 100.0)
+    assert motorlaw.target_speed_rad_s(m, v) == pytest.approx(2 * math.pi * 100.0)
     assert voltage_for_frequency(m, 120.0) == pytest.approx(3.3)
-    with pytest.raises(TimingError, match=r"above the motor's 4\.5 V limit"):
+    with pytest.raises(TimingError, match=r"above the motor's 4\.5 V limit \(at most 170 Hz\)"):
         voltage_for_frequency(m, 180.0)
 
 
 def test_the_shipped_rom_overdrive_and_brake_shorten_its_timing():
     model = load_envelope_model(ROOT / "models" / "rom-default")
-    design = {"orientation": "reverse", "attachment": "pogo", "skin_E_kPa": 49.0,
-              "fat_thickness_mm": 14.0, "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
+    design = {"orientation": "reverse", "attachment": "pogo", "n_rings": 3,
+              "ring_1_E_kPa": 150.0, "ring_2_E_kPa": 150.0, "ring_3_E_kPa": 150.0,
+              "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08,
+              "skin_E_kPa": 49.0, "fat_thickness_mm": 14.0, "tissue_loss_factor": 0.3,
+              "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
     t = envelope_timing(rom_response(model, design), 3.3, 4.5, 0.1, dt_s=5e-4)
     assert t.rise_overdrive_ms < t.t90_ms
     assert t.min_isi_ms < t.min_isi_unbraked_ms
@@ -96,3 +101,24 @@ def test_the_shipped_rom_overdrive_and_brake_shorten_its_timing():
     w_nom, w_max = 2.9, 4.1
     assert t.overdrive_ms == pytest.approx(20.0 * math.log(w_max / (w_max - w_nom)), abs=0.5)
     assert t.brake_ms == pytest.approx(20.0 * math.log(1 + w_nom / w_max), abs=0.5)
+
+
+def test_plan_timing_above_the_motors_reach_says_so_with_the_number():
+    from types import SimpleNamespace as NS
+
+    from planner.timing import plan_timing
+
+    req = NS(timing=NS(model=str(ROOT / "models" / "rom-default"), tau_spinup_ms=20.0,
+                       tau_spindown_ms=35.0, isi_fraction=0.1),
+             criterion=NS(kind="ratio"), allow_extrapolation=False,
+             site={"skin_E_kPa": 49.0, "fat_thickness_mm": 14.0, "tissue_loss_factor": 0.3})
+    inputs = {"orientation": "reverse", "attachment": "glued", "n_rings": 2,
+              "ring_1_E_kPa": 150.0, "ring_2_E_kPa": 150.0, "ring_3_E_kPa": 150.0,
+              "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08}
+    out = plan_timing(req, NS(inputs=inputs, frequency_hz=200.0, center_um=5.0))
+    assert all(out[k] is None for k in TIMING_KEYS)
+    assert "200 Hz needs 5.23 V" in out["unavailable"] and "at most 170 Hz" in out["unavailable"]
+    assert out["max_frequency_hz"] == pytest.approx(120.0 * 4.1 / 2.9, abs=1e-3)
+    ok = plan_timing(req, NS(inputs=inputs, frequency_hz=160.0, center_um=5.0))
+    assert ok.get("unavailable") is None and ok["rise_ms"] > 0 and ok["brake_ms"] > 0
+    assert ok["design"]["n_rings"] == 2 and ok["design"]["tau_spinup_ms"] == 20.0
