@@ -34,8 +34,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("fieldspec", "figstyle", "fem", "surrogate", "studies", "planner", "calibration",
-            "hardware", "hapticrom")
+PACKAGES = ("fieldspec", "figstyle", "motorlaw", "fem", "surrogate", "studies", "planner",
+            "calibration", "hardware", "hapticrom")
 SURROGATE_KINDS = frozenset({"gp", "nn", "rom", "mlp"})
 DEVICE_KINDS = frozenset({"sim", "log", "serial"})
 REGISTRIES = frozenset({"surrogate/kinds.py", "hardware/backends.py"})
