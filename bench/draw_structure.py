@@ -63,10 +63,17 @@ def svg(lines: Counter[str], edges: Counter[tuple[str, str]]) -> str:
            '</marker></defs>', f'<rect width="{width}" height="{height}" fill="white"/>',
            f'<text x="{MARGIN}" y="{MARGIN + 8}" font-size="15" font-weight="bold">hapticrom: '
            'packages, their imports (arrows point to what is imported), the registries</text>']
+    # spread the ends along a box's edge, in the order of the other ends, so arrows stay apart
+    outs = {p: sorted((q for (o, q) in edges if o == p), key=lambda q: where[q]) for p in where}
+    ins = {p: sorted((o for (o, q) in edges if q == p), key=lambda o: where[o]) for p in where}
+
+    def along(x: float, items: list[str], item: str) -> float:
+        return x + W * (items.index(item) + 1) / (len(items) + 1)
+
     for (a, b), n in sorted(edges.items()):
         (xa, ya), (xb, yb) = where[a], where[b]
-        x1, y1 = xa + W / 2, ya + H if yb > ya else ya
-        x2, y2 = xb + W / 2, yb if yb > ya else yb + H
+        x1, y1 = along(xa, outs[a], b), ya + H if yb > ya else ya
+        x2, y2 = along(xb, ins[b], a), yb if yb > ya else yb + H
         if ya == yb:  # same layer: side to side
             x1, y1 = (xa + W, ya + H / 2) if xb > xa else (xa, ya + H / 2)
             x2, y2 = (xb, yb + H / 2) if xb > xa else (xb + W, yb + H / 2)
