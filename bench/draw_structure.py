@@ -22,9 +22,10 @@ from bench.count_structure import ROOT, source_files
 ROWS = (("hapticrom",), ("hardware",), ("planner", "calibration"), ("studies",),
         ("surrogate",), ("fem",), ("motorlaw", "fieldspec", "figstyle"))
 #: The extension points: package -> what is registered there, one per line.
-REGISTRIES = {"surrogate": "kinds.py: surrogate kinds", "hardware": "backends.py: devices",
-              "fieldspec": "errors.py: FieldError, WorkError"}
-W, H, GAP_X, GAP_Y, MARGIN = 230, 58, 40, 46, 20
+REGISTRIES = {"surrogate": "registry: kinds.py (kinds)",
+              "hardware": "registry: backends.py (devices)",
+              "fieldspec": "errors.py: the two error bases"}
+W, H, GAP_X, GAP_Y, MARGIN = 240, 58, 40, 46, 20
 
 
 def package_graph(root: Path = ROOT) -> tuple[Counter[str], Counter[tuple[str, str]]]:
@@ -55,14 +56,14 @@ def svg(lines: Counter[str], edges: Counter[tuple[str, str]]) -> str:
         x0 = (width - (len(row) * W + (len(row) - 1) * GAP_X)) / 2
         for i, pkg in enumerate(row):
             where[pkg] = (x0 + i * (W + GAP_X), MARGIN + 30 + r * (H + GAP_Y))
-    height = MARGIN * 2 + 30 + len(ROWS) * (H + GAP_Y) + 20
+    height = MARGIN * 2 + 30 + len(ROWS) * (H + GAP_Y) + 30
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
            f'viewBox="0 0 {width} {height}" font-family="DejaVu Sans, Arial, sans-serif">',
            '<defs><marker id="a" viewBox="0 0 10 10" refX="10" refY="5" markerWidth="7" '
            'markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#555"/>'
            '</marker></defs>', f'<rect width="{width}" height="{height}" fill="white"/>',
            f'<text x="{MARGIN}" y="{MARGIN + 8}" font-size="15" font-weight="bold">hapticrom: '
-           'packages, their imports (arrows point to what is imported), the registries</text>']
+           'the packages and their imports</text>']
     # spread the ends along a box's edge, in the order of the other ends, so arrows stay apart
     outs = {p: sorted((q for (o, q) in edges if o == p), key=lambda q: where[q]) for p in where}
     ins = {p: sorted((o for (o, q) in edges if q == p), key=lambda o: where[o]) for p in where}
@@ -92,10 +93,12 @@ def svg(lines: Counter[str], edges: Counter[tuple[str, str]]) -> str:
                    f'text-anchor="end" fill="#555">{lines[pkg]:,} lines</text>')
         if reg:
             out.append(f'<text x="{x + 10:.0f}" y="{y + 44:.0f}" font-size="11" '
-                       f'fill="#1a5276">registry {reg}</text>')
-    out.append(f'<text x="{MARGIN}" y="{height - 12}" font-size="11" fill="#555">Drawn by '
-               '`python bench/draw_structure.py` from the code\'s imports; arrow width ~ '
-               'number of imports; red would be an import against the layers (none).</text>')
+                       f'fill="#1a5276">{reg}</text>')
+    out.append(f'<text x="{MARGIN}" y="{height - 26}" font-size="11" fill="#555">An arrow '
+               'points to what is imported (width: how many imports); blue boxes hold a '
+               'registry.</text>')
+    out.append(f'<text x="{MARGIN}" y="{height - 10}" font-size="11" fill="#555">Drawn from '
+               'the code by `python bench/draw_structure.py docs/architecture.svg`.</text>')
     out.append("</svg>")
     return "\n".join(out) + "\n"
 
