@@ -35,6 +35,7 @@ from fieldspec import Context, Spec, read_table, require_table
 from fieldspec.toml import read_toml_file
 from hardware.safety import LEVEL_TOLERANCE, SafetyError, SafetyLimits, check_schedule
 from hardware.schedule import PlanFile, Schedule
+from motorlaw import SpeedLaw
 
 __all__ = ["ERM_RATING", "USER_KEYS", "ActuatorRating", "DeviceLimits", "Resolved",
            "load_user_limits", "preflight", "resolve_limits"]
@@ -73,13 +74,11 @@ class ActuatorRating:
 
 
 def _erm_rating() -> ActuatorRating:
-    from surrogate.runtime.rom import MotorConstants
-
-    m = MotorConstants()
+    m = SpeedLaw()
     return ActuatorRating(
         "coin ERM of the shipped models", m.rated_voltage_V, m.rated_frequency_hz,
         m.start_voltage_V, m.max_voltage_V,
-        "surrogate.runtime.rom.MotorConstants (the fem.motor.ERMMotor defaults the models "
+        "motorlaw.SpeedLaw (the one ERM speed law, the defaults the models "
         "were trained with): 3.3 V rated, 120 rev/s at 3.3 V (Guo et al. 2025 drive a Leader "
         "LCM0720A3463F at 3.3 V); 4.5 V maximum is the project's estimate for that motor "
         "class, not a datasheet value")

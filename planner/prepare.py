@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from motorlaw import SpeedLaw
 from planner.candidates import expand_any
 from planner.domain import Domain, Extrapolation, build_domain, check_value, drive_reach
 from planner.layout import LayoutError, LayoutRequest, short_repr
@@ -34,7 +35,7 @@ class Prepared:
 
     predictor: Any
     rom: Any  # surrogate.runtime.rom.EnvelopeModel or None (timing disabled)
-    motor: Any  # the ERM's MotorConstants (the ROM's, else the fem defaults)
+    motor: Any  # the ERM's motorlaw.SpeedLaw (the ROM's, else the defaults)
     domain: Domain
     combos: list[tuple[dict[str, Any], float]]
     out: dict[str, np.ndarray]
@@ -133,14 +134,12 @@ def _designs(req: LayoutRequest, predictor: Any, domain: Domain
 
 def prepare(req: LayoutRequest) -> Prepared:
     """Check the request against its models and predict every candidate (module docstring)."""
-    from surrogate.runtime.rom import MotorConstants
-
     try:
         predictor = load_predictor(req.model)
     except (OSError, ValueError) as err:  # ModelFileError: missing, malformed, altered
         raise LayoutError("model.path", f"model.path = {short_repr(req.model)}: {err}") from None
     rom = _load_rom(req) if req.timing.enabled else None
-    motor = rom.motor if rom is not None else MotorConstants()
+    motor = rom.motor if rom is not None else SpeedLaw()
     domain = build_domain(predictor, req.model, rom, req.timing.model if rom else None)
     names = predictor.input_names
     shared = _site(req, domain, names) + (_timing(req, domain) if rom is not None else [])
