@@ -141,10 +141,10 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
           f"{len(res['designs'])} held-out rows of `{DATASET.relative_to(DATASET.parents[1])}` "
           "(split of `hapticrom train`), picked by farthest-point sampling in the encoded "
           "feature box from the row nearest its centre (`studies/accuracy/designs.py`).", ""]
-    names = list(res["designs"][0].params)
+    names = list(res["designs"][0].values)
     L += ["| row | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
     for d in res["designs"]:
-        L.append(f"| {d.row} | " + " | ".join(_fmt(d.params[n]) for n in names) + " |")
+        L.append(f"| {d.row} | " + " | ".join(_fmt(d.values[n]) for n in names) + " |")
     L += ["", "## Every way to get an answer", "",
           "Time per answer: FE = one full solve (mesh, assembly, factorisation, solve), median "
           f"of {s.repeat} runs per design, median over designs; learned models = median call "
