@@ -78,8 +78,8 @@ def _erm_rating() -> ActuatorRating:
     return ActuatorRating(
         "coin ERM of the shipped models", m.rated_voltage_V, m.rated_frequency_hz,
         m.start_voltage_V, m.max_voltage_V,
-        "motorlaw.SpeedLaw (the one ERM speed law, the defaults the models "
-        "were trained with): 3.3 V rated, 120 rev/s at 3.3 V (Guo et al. 2025 drive a Leader "
+        "motorlaw.SpeedLaw (the one motor law; the defaults the models were trained with): "
+        "3.3 V rated, 120 rev/s at 3.3 V (Guo et al. 2025 drive a Leader "
         "LCM0720A3463F at 3.3 V); 4.5 V maximum is the project's estimate for that motor "
         "class, not a datasheet value")
 

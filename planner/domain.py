@@ -14,7 +14,7 @@ checked against it before anything is predicted (:func:`check_value`), naming th
   candidates, the timing and in the plan's summary.
 
 Drive reach (:func:`drive_reach`): an ERM's speed is set by its voltage. Its steady-speed law
-(``surrogate.runtime.rom.MotorConstants``: ``V = V_start + f (V_rated - V_start) / f_rated``,
+(``motorlaw.SpeedLaw``: ``V = V_start + f (V_rated - V_start) / f_rated``,
 120 rev/s at 3.3 V, stiction below 0.4 V) and its voltage limit (4.5 V) give the highest
 frequency it reaches (169.66 Hz for those numbers); a frequency above it is not a candidate.
 """
@@ -174,7 +174,7 @@ def check_value(bound: Bound, value: Any, where: str,
 
 
 def drive_reach(motor: Any, frequency_hz: float) -> dict[str, Any] | None:
-    """None when the ERM ``motor`` (``MotorConstants``) spins at ``frequency_hz`` within its
+    """None when the ERM ``motor`` (``motorlaw.SpeedLaw``) spins at ``frequency_hz`` within its
     voltage limit; else why not, with the numbers of its steady-speed law."""
     per_hz = (motor.rated_voltage_V - motor.start_voltage_V) / motor.rated_frequency_hz
     volts = motor.start_voltage_V + frequency_hz * per_hz

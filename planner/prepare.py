@@ -35,7 +35,7 @@ class Prepared:
 
     predictor: Any
     rom: Any  # surrogate.runtime.rom.EnvelopeModel or None (timing disabled)
-    motor: Any  # the ERM's motorlaw.SpeedLaw (the ROM's, else the defaults)
+    motor: Any  # the ERM's speed law (the envelope model's, else motorlaw's defaults)
     domain: Domain
     combos: list[tuple[dict[str, Any], float]]
     out: dict[str, np.ndarray]

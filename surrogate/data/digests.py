@@ -177,4 +177,8 @@ def _check_one(path: Path, name: str, entry: Mapping[str, Any], deep: bool) -> l
     if rows_digest(table) != entry.get("rows_sha256"):
         return [f"{name}: its rows do not match the digest recorded when it was written "
                 "(a value was edited, or the file was damaged or replaced)"]
+    if file_sha256(path) != entry.get("file_sha256"):
+        return [f"{name}: its bytes do not match the sha256 recorded when it was written, "
+                "although its rows decode the same (damaged or rewritten): restore it, or "
+                "record it again with `hapticrom dataset seal` if it was rewritten on purpose"]
     return []

@@ -331,9 +331,14 @@ class Store:
         if columns is None and isinstance(listed, Mapping):
             for part, table in zip(self.parts(), tables, strict=True):
                 name = part.name.removeprefix(".").removesuffix(".tmp")
-                if rows_digest(table) != (listed.get(name) or {}).get("rows_sha256"):
+                entry = listed.get(name) or {}
+                if rows_digest(table) != entry.get("rows_sha256"):
                     raise DatasetError(str(part), f"{self.path}: refused: {name}: its rows "
                                        "do not match the digest recorded when it was written")
+                if "file_sha256" in entry and file_sha256(part) != entry["file_sha256"]:
+                    raise DatasetError(str(part), f"{self.path}: refused: {name}: its bytes "
+                                       "do not match the sha256 recorded when it was written "
+                                       "(damaged or rewritten)")
         if not tables:
             schema = self.schema
             if columns:

@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 from fieldspec.documents import loads_json
 from motorlaw import SpeedLaw, held_speed_and_phase
 from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
-from surrogate.runtime.encoding import PredictorInputError
+from surrogate.runtime.encoding import PredictorInputError, n_features
 from surrogate.runtime.predictor import Predictor, make_session
 
 __all__ = ["FORMAT", "POINTS", "STATES", "EnvelopeModel", "RomBlowUpError", "RomInputError",
@@ -290,6 +290,17 @@ def model_from_parts(coefficients: Mapping[str, Any], harmonic_card: dict[str, A
     grid = np.asarray(coefficients["grid_hz"], dtype=float)
     if grid.ndim != 1 or grid.size < 2 or grid[0] != F_LOW_HZ or np.any(np.diff(grid) <= 0):
         raise ValueError(f"grid_hz: need increasing frequencies from {F_LOW_HZ} Hz")
+    ranges = coefficients["motor_ranges"]
+    if not isinstance(ranges, Mapping) or set(ranges) != set(MOTOR_INPUTS) or not all(
+            len(ranges[k]) == 2 and all(np.isfinite(np.asarray(ranges[k], dtype=float)))
+            and float(ranges[k][0]) < float(ranges[k][1]) for k in MOTOR_INPUTS):
+        raise ValueError(f"motor_ranges: need finite [low, high] for exactly "
+                         f"{list(MOTOR_INPUTS)}")
+    columns = np.asarray(coefficients["feature_columns"])
+    width = n_features(harmonic.specs)  # the harmonic model's encoded inputs
+    if columns.ndim != 1 or columns.dtype.kind not in "iu" or np.unique(columns).size != \
+            columns.size or (columns.size and not 0 <= columns.min() <= columns.max() < width):
+        raise ValueError(f"feature_columns: need distinct integers in [0, {width})")
     meta = {k: v for k, v in coefficients.items() if k not in ("weights", "clip", "motor")}
     return EnvelopeModel(harmonic, weights, SpeedLaw(**coefficients["motor"]),
                          {k: (float(a), float(b))

@@ -58,7 +58,7 @@ def _metadata(wheel: Path) -> list[str]:
 def test_runtime_wheel_carries_the_runtime_only(wheels):
     names = zipfile.ZipFile(wheels["runtime"]).namelist()
     tops = {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")}
-    assert tops == {"surrogate", "planner", "fieldspec", "figstyle"}
+    assert tops == {"surrogate", "planner", "fieldspec", "figstyle", "motorlaw", "calibration"}
     surrogate = {n for n in names if n.startswith("surrogate/")}
     assert surrogate == {"surrogate/__init__.py"} | {
         f"surrogate/runtime/{p.name}" for p in (REPO / "surrogate/runtime").glob("*.py")}

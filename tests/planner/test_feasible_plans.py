@@ -74,14 +74,16 @@ def test_no_reachable_frequency_is_a_named_error():
 
 
 def test_the_domain_is_the_intersection_of_both_models():
+    """The envelope model takes the motor's time constants besides the harmonic inputs: its
+    trained range of tau_spinup_ms (10-40 ms) narrows the plan's domain."""
     d = thigh()
-    d["site"]["fat_thickness_mm"] = 20.0  # inside the harmonic model (3-20), not the ROM
+    d["timing"]["tau_spinup_ms"] = 45.0  # no input of the harmonic model; outside the ROM's
     with pytest.raises(LayoutError) as info:
         plan_layout(layout_from_dict(d))
     msg = str(info.value)
-    assert info.value.field == "site.fat_thickness_mm"
-    assert "models/rom-default" in msg and "19.99" in msg and "allow_extrapolation" in msg
-    d["timing"]["enabled"] = False  # without the ROM the harmonic range alone applies
+    assert info.value.field == "timing.tau_spinup_ms"
+    assert "models/rom-default" in msg and "39.99" in msg and "allow_extrapolation" in msg
+    d["timing"]["enabled"] = False  # without the envelope model the harmonic ranges alone
     plan = plan_layout(layout_from_dict(d))
     assert plan.best is not None and len(plan.domain.models) == 1
     assert plan.domain.bounds["fat_thickness_mm"].high == 20.0
@@ -89,16 +91,16 @@ def test_the_domain_is_the_intersection_of_both_models():
 
 def test_every_extrapolation_is_flagged_where_it_happens_and_summarised():
     d = thigh()
-    d["site"]["fat_thickness_mm"] = 20.0
+    d["timing"]["tau_spinup_ms"] = 45.0
     d["model"]["allow_extrapolation"] = True
     plan = plan_layout(layout_from_dict(d))
     best = plan.best
-    assert [x.field for x in best.extrapolations] == ["site.fat_thickness_mm"]
+    assert [x.field for x in best.extrapolations] == ["timing.tau_spinup_ms"]
     assert best.extrapolations[0].models == (str(ROOT / "models" / "rom-default"),)
-    assert best.extrapolated and plan.timing["extrapolated"] == ["fat_thickness_mm"]
+    assert best.extrapolated and plan.timing["extrapolated"] == ["tau_spinup_ms"]
     v = plan_to_dict(plan)["validity"]
     assert v["extrapolated"] is True and v["timing"]["extrapolated"] is True
-    assert v["inputs"][0]["field"] == "site.fat_thickness_mm"
+    assert v["inputs"][0]["field"] == "timing.tau_spinup_ms"
     # the thigh's pitches put every neighbour beyond the profile's 20 mm
     assert v["profile"]["extrapolated"] and v["profile"]["leakage_share_beyond_profile"] == 1.0
     assert v["profile"]["nearest_neighbour_from_edge_mm"] > 20.0

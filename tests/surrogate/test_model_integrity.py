@@ -258,19 +258,21 @@ def test_loading_the_shipped_models_still_works():
     assert load_envelope_model(SHIPPED["rom"]).input_names
 
 
-@pytest.mark.parametrize("edit", ["motor_ranges", "interactions", "point", "motor"])
+@pytest.mark.parametrize("edit", ["motor_ranges", "feature_columns", "weights", "clip",
+                                  "motor"])
 def test_a_resealed_rom_with_a_malformed_spec_is_refused_at_load(tmp_path, edit):
     """Found by bench/bench_mutations_models.py: a renamed motor range loaded, then simulate
-    failed with KeyError 'tau_spindown_ms'."""
+    failed with KeyError 'tau_spindown_ms'. Everything the model indexes is checked at load."""
     d = copy_model("rom", tmp_path / "m")
     coef = json.loads((d / "coefficients.json").read_text())
     if edit == "motor_ranges":
-        coef["spec"]["motor_ranges"]["tau_spindown_mt"] = \
-            coef["spec"]["motor_ranges"].pop("tau_spindown_ms")
-    elif edit == "interactions":
-        coef["spec"]["interactions"] = [["orientation", "colour"]]
-    elif edit == "point":
-        coef["blocks"][0]["point"] = "centre"
+        coef["motor_ranges"]["tau_spindown_mt"] = coef["motor_ranges"].pop("tau_spindown_ms")
+    elif edit == "feature_columns":
+        coef["feature_columns"][0] = 10_000
+    elif edit == "weights":
+        coef["weights"]["center"] = coef["weights"]["center"][:-1]
+    elif edit == "clip":
+        del coef["clip"]["fn_hz"]
     else:
         coef["motor"]["max_voltage_V"] = 1.0
     (d / "coefficients.json").write_text(json.dumps(coef))

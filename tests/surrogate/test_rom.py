@@ -246,12 +246,17 @@ def test_identification_recovers_a_known_mode(model):
 
 def test_train_kind_rom_registers_a_verified_model(tmp_path, capsys):
     from hapticrom.cli import main
+    from surrogate.data.integrity import manifest_digest
 
-    data = tmp_path / "data"
+    data = tmp_path / "data"  # a three-part subset, its manifest listing those parts only
     data.mkdir()
-    shutil.copy(DATASET / "_manifest.json", data)
-    for part in sorted(DATASET.glob("part-*.parquet"))[:3]:
-        shutil.copy(part, data)
+    manifest = json.loads((DATASET / "_manifest.json").read_text())
+    keep = sorted(manifest["parts"])[:3]
+    for name in keep:
+        shutil.copy(DATASET / name, data)
+    manifest["parts"] = {k: manifest["parts"][k] for k in keep}
+    manifest["digest"] = manifest_digest(manifest)
+    (data / "_manifest.json").write_text(json.dumps(manifest))
     out = tmp_path / "rom"
     opts = json.dumps({"max_nfev": 2})
     assert main(["train", "--data", str(data), "--kind", "rom", "--out", str(out),
