@@ -168,7 +168,8 @@ def load_predictor(path: str | Path) -> Predictor:
         raise ModelFileError("kind", f"{root / CARD_NAME}: a {card.get('kind')!r} model, not "
                              "a steady-state predictor (no ONNX graph)")
     graph = card["graph"]
-    if not isinstance(graph, dict) or graph.get("dtype") not in _DTYPES:
+    if not isinstance(graph, dict) or not isinstance(graph.get("dtype"), str) \
+            or graph["dtype"] not in _DTYPES:
         raise ModelFileError("graph", f"{root / CARD_NAME}: graph.dtype must be one of "
                              f"{sorted(_DTYPES)} (check: keys)")
     name = graph["file"]
