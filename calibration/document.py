@@ -9,7 +9,6 @@ the fitted inputs, which the planner plans over to carry the uncertainty into th
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +18,7 @@ import numpy as np
 
 from calibration.fit import IDENTIFIABLE_WIDTH_RATIO, KEPT_SAMPLES, Calibration
 from fieldspec import FieldError
+from fieldspec.documents import read_json_file
 
 __all__ = ["KIND", "SCHEMA_VERSION", "CalibrationFileError", "Tissue", "calibration_document",
            "read_calibration", "statement"]
@@ -139,10 +139,7 @@ def read_calibration(path: str | Path) -> Tissue:
     """Read a calibration document as a :class:`Tissue`; raises
     :class:`CalibrationFileError` naming the key that is wrong."""
     where = str(path)
-    try:
-        doc = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise CalibrationFileError("<file>", f"cannot read calibration {where!r}: {err}") from None
+    doc = read_json_file(path, CalibrationFileError, "calibration")  # size and nesting limits
     if not isinstance(doc, dict) or doc.get("kind") != KIND:
         raise CalibrationFileError("kind", f"{where}: not a calibration document (kind must be "
                                    f"{KIND!r})")

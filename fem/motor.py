@@ -16,15 +16,14 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from motorlaw import (
-    DEFAULTS,
     TWO_PI,
+    SpeedLaw,
     VoltageSchedule,
-    check_law,
     phase,
     rise_time_s,
     simulate_speed,
@@ -42,31 +41,19 @@ __all__ = ["ERMMotor", "VoltageSchedule", "erm_load_history", "phase", "rise_tim
 
 
 @dataclass(frozen=True)
-class ERMMotor:
-    """Coin ERM motor: the unbalance and the speed law's parameters (:class:`motorlaw.SpeedLaw`;
-    defaults :data:`motorlaw.DEFAULTS`, documented estimates).
+class ERMMotor(SpeedLaw):
+    """Coin ERM motor: the speed law's parameters (:class:`motorlaw.SpeedLaw`, inherited with
+    its defaults :data:`motorlaw.DEFAULTS`, documented estimates) plus the unbalance.
 
     Attributes:
-        unbalance_kg_m: eccentric mass times eccentricity m*e, kg m (> 0).
-        rated_voltage_V: drive voltage at which the motor spins at ``rated_frequency_hz``, V.
-        rated_frequency_hz: steady spin frequency at the rated voltage, rev/s (paper: 120).
-        start_voltage_V: voltage below which the rotor does not turn (stiction), V.
-        tau_spinup_s: mechanical time constant while driven towards a faster target, s.
-        tau_spindown_s: time constant while slowing towards a slower target, s.
-        max_voltage_V: largest |voltage| a schedule may apply, V.
+        unbalance_kg_m: eccentric mass times eccentricity m*e, kg m (> 0; keyword only).
     """
 
-    unbalance_kg_m: float
-    rated_voltage_V: float = DEFAULTS["rated_voltage_V"]
-    rated_frequency_hz: float = DEFAULTS["rated_frequency_hz"]
-    start_voltage_V: float = DEFAULTS["start_voltage_V"]
-    tau_spinup_s: float = DEFAULTS["tau_spinup_s"]
-    tau_spindown_s: float = DEFAULTS["tau_spindown_s"]
-    max_voltage_V: float = DEFAULTS["max_voltage_V"]
+    unbalance_kg_m: float = field(kw_only=True)
 
     def __post_init__(self) -> None:
         _require("unbalance_kg_m", self.unbalance_kg_m)
-        check_law(self)
+        super().__post_init__()
 
     @property
     def speed_per_volt(self) -> float:

@@ -88,10 +88,11 @@ def load_history(scene: Scene, problem: Problem):
         m = u.motor
         tau_up = m.tau_spinup_s if problem.effects["spin_up"] else 1e-9
         tau_down = m.tau_spindown_s if problem.effects["spin_up"] else 1e-9
-        erm = motor.ERMMotor(m.unbalance_kg_m, m.rated_voltage_V, m.rated_frequency_hz,
-                             m.start_voltage_V, tau_up, tau_down,
+        erm = motor.ERMMotor(m.rated_voltage_V, m.rated_frequency_hz, m.start_voltage_V,
+                             tau_up, tau_down,
                              max(MOTOR_LAW["max_voltage_V"],
-                                 float(np.max(np.abs([v for _, v in a.voltage_schedule])))))
+                                 float(np.max(np.abs([v for _, v in a.voltage_schedule])))),
+                             unbalance_kg_m=m.unbalance_kg_m)
         schedule = motor.VoltageSchedule(a.voltage_schedule_s)
         return motor.erm_load_history(erm, schedule), 2
     # a normal actuator: force amplitude follows the voltage schedule, relative to rated voltage

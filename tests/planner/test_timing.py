@@ -117,7 +117,8 @@ def test_plan_timing_above_the_motors_reach_says_so_with_the_number():
               "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08}
     out = plan_timing(req, NS(inputs=inputs, frequency_hz=200.0, center_um=5.0))
     assert all(out[k] is None for k in TIMING_KEYS)
-    assert "200 Hz needs 5.233 V" in out["unavailable"] and "at most 169.65 Hz" in out["unavailable"]
+    why = out["unavailable"]
+    assert "200 Hz needs 5.233 V" in why and "at most 169.65 Hz" in why
     assert out["max_frequency_hz"] == pytest.approx(120.0 * 4.1 / 2.9, abs=1e-3)
     ok = plan_timing(req, NS(inputs=inputs, frequency_hz=160.0, center_um=5.0))
     assert ok.get("unavailable") is None and ok["rise_ms"] > 0 and ok["brake_ms"] > 0

@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from model_dirs import copy_model, read, reseal, tree, write
 
@@ -164,8 +164,17 @@ def test_a_damaged_card_file(kind, cut, junk):
     with _tmp() as t:
         d = copy_model(kind, Path(t) / "m")
         raw = (d / "card.json").read_bytes()
-        (d / "card.json").write_bytes(raw[:int(cut * len(raw))] + junk)
+        damaged = raw[:int(cut * len(raw))] + junk
+        assume(not _same_json(damaged, raw))  # a dropped trailing newline alters nothing
+        (d / "card.json").write_bytes(damaged)
         _refused(d, "card.json")
+
+
+def _same_json(a: bytes, b: bytes) -> bool:
+    try:
+        return json.loads(a) == json.loads(b)
+    except ValueError:
+        return False
 
 
 def test_a_resealed_model_that_loads_still_answers():
