@@ -25,6 +25,7 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
@@ -55,7 +56,6 @@ def surrogate_std_factor(card: Mapping[str, Any]) -> float:
     cov = [c for c in cov if isinstance(c, int | float) and 0.0 < c < 0.95]
     if not cov:
         return 1.0
-    from statistics import NormalDist
 
     z = NormalDist().inv_cdf(0.5 + 0.5 * min(cov))
     return float(Z95 / z)

@@ -14,6 +14,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from fieldspec import FieldError
+
 from . import absorbers
 from .assembly import UR, UT, UZ
 from .materials import Material
@@ -54,11 +56,12 @@ class MeshSpec:
     cells_z: tuple[int, ...] | None = None
 
 
-class CellPlanError(ValueError):
-    """Fixed cell counts that do not fit the body: ``axis`` is "r" or "z"."""
+class CellPlanError(FieldError):
+    """Fixed cell counts that do not fit the body: ``axis`` is "r" or "z" (``field`` is
+    ``cells_r`` or ``cells_z``)."""
 
     def __init__(self, axis: str, message: str) -> None:
-        super().__init__(message)
+        super().__init__(f"cells_{axis}", message)
         self.axis = axis
 
 

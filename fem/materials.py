@@ -21,6 +21,8 @@ import math
 import re
 from dataclasses import dataclass
 
+from fieldspec import FieldError
+
 __all__ = [
     "ALIASES",
     "BONE_LOSS_FACTOR",
@@ -94,8 +96,9 @@ class Material:
         return math.sqrt((self.lambda_Pa + 2.0 * self.mu_Pa) / self.density_kg_m3)
 
 
-class UnknownMaterialError(KeyError, ValueError):
-    """Raised by :func:`get_material` for a name that is neither a material nor an alias."""
+class UnknownMaterialError(FieldError, KeyError):
+    """Raised by :func:`get_material` for a name that is neither a material nor an alias
+    (``field`` is ``material``; a ``KeyError`` too, as a failed lookup)."""
 
     def __init__(self, name: str) -> None:
         self.name = name
@@ -103,7 +106,7 @@ class UnknownMaterialError(KeyError, ValueError):
             f"unknown material {name!r}; known materials: {', '.join(sorted(MATERIALS))} "
             f"(aliases: {', '.join(sorted(ALIASES))})"
         )
-        super().__init__(self.message)
+        super().__init__("material", self.message)
 
     def __str__(self) -> str:  # KeyError would repr-quote the message
         return self.message

@@ -21,19 +21,39 @@ release of compatibility), returning the version-1 layout.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from . import SOLVER_VERSION, results
-
-if TYPE_CHECKING:
-    from .simulation import SimulationResult
+from .scene import Scene, scene_hash, scene_to_dict
 
 __all__ = ["KINDS", "SCHEMA_VERSION", "read_result", "result_document"]
 
 SCHEMA_VERSION = 1
+
+
+class SimulationResult(Protocol):
+    """What a result document is made of (:class:`fem.simulation.SimulationResult` is one;
+    it writes itself with :func:`result_document`, so this module names what it reads rather
+    than importing it). Amplitudes in m, distances in mm."""
+
+    scene: Scene
+    r_mm: NDArray
+    U: NDArray
+    center: NDArray
+    edge: NDArray
+    edge_mm: float | None
+    centre_z_mm: float
+    profile_mm: NDArray
+    profile: NDArray
+    meta: dict
+    histories: Any
+    extras: dict
+
+    @property
+    def normalized_edge(self) -> float | None: ...
 KINDS = {k: f"hapticrom.simulate.{k}" for k in ("harmonic", "static", "transient")}
 _COMPONENTS = ("ur", "uz", "ut")
 
@@ -128,8 +148,6 @@ def _histories(res: SimulationResult) -> dict[str, Any]:
 
 def result_document(res: SimulationResult, scene_name: str | None = None) -> dict[str, Any]:
     """The version-1 JSON document of a solved scene (see the module docstring)."""
-    from .scene import scene_hash, scene_to_dict
-
     a = res.scene.analysis
     kind = a.kind
     doc: dict[str, Any] = {

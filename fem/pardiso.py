@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from fem import mkl
+from fieldspec import WorkError
 
 __all__ = ["PardisoError", "PardisoFactorization", "available", "clear_pool"]
 
@@ -49,7 +50,7 @@ _ERRORS = {-1: "input inconsistent", -2: "not enough memory", -3: "reordering pr
            -10: "error opening out-of-core files", -11: "read/write error with OOC files"}
 
 
-class PardisoError(RuntimeError):
+class PardisoError(WorkError):
     """PARDISO returned an error code (``code``)."""
 
     def __init__(self, code: int, phase: int) -> None:

@@ -19,6 +19,7 @@ from . import SOLVER_VERSION, probes, results, transient_analysis
 from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .domain import Domain
 from .haptic_unit import pin_contact_check
+from .output import result_document
 from .problem import (
     build_problem,
     drive_omega,
@@ -78,8 +79,6 @@ class SimulationResult:
     def to_dict(self, scene_name: str | None = None) -> dict:
         """The self-describing JSON document, schema version 1 (:mod:`fem.output`,
         docs/output-schema.md)."""
-        from .output import result_document
-
         return result_document(self, scene_name)
 
     def to_dict_v0(self) -> dict:

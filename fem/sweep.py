@@ -22,6 +22,7 @@ from .problem import Problem, build_problem, resolution_warning
 from .scene import LoadKind, Scene
 from .solve import OperatorLog, solve_mode
 from .sweep_operator import CHEBYSHEV_NODES, SweepOperator
+from .sweep_output import sweep_document, sweep_summary
 from .sweep_rom import KRYLOV_DEPTH, MAX_EXPANSIONS, SWEEP_TOLERANCE, greedy_model
 
 
@@ -70,14 +71,10 @@ class SweepResult:
 
     def to_dict(self, scene_name: str | None = None) -> dict:
         """The versioned JSON document ``hapticrom.simulate.sweep`` (docs/output-schema.md)."""
-        from .sweep_output import sweep_document
-
         return sweep_document(self, scene_name)
 
     def summary(self, scene_name: str | None = None) -> str:
         """A short human-readable report (what it prints is defined in it)."""
-        from .sweep_output import sweep_summary
-
         return sweep_summary(self, scene_name)
 
 

@@ -11,20 +11,47 @@ full solves (factorisations) and back-substitutions it took, the expansion frequ
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+import figstyle
+
 from . import SOLVER_VERSION, results
 from .output import MAGNITUDE, PHASE_REFERENCE, SCHEMA_VERSION, describe_design
-
-if TYPE_CHECKING:
-    from .sweep import SweepResult
+from .scene import Scene, scene_hash, scene_to_dict
 
 __all__ = ["KIND", "extrema", "plot_sweep", "sweep_document", "sweep_summary"]
 
 KIND = "hapticrom.simulate.sweep"
+
+
+class SweepResult(Protocol):
+    """What a sweep document is made of (:class:`fem.sweep.SweepResult` is one; it writes
+    itself with :func:`sweep_document`, so this module names what it reads rather than
+    importing it). Amplitudes in m, frequencies in Hz, distances in mm."""
+
+    scene: Scene
+    frequency_hz: NDArray
+    r_mm: NDArray
+    U: NDArray
+    center: NDArray
+    edge: NDArray
+    edge_mm: float | None
+    centre_z_mm: float
+    profile_mm: NDArray
+    profile: NDArray
+    error_estimate: float
+    tolerance: float
+    full_solves: int
+    meta: dict
+
+    @property
+    def center_amplitude_um(self) -> NDArray | None: ...
+
+    @property
+    def edge_amplitude_um(self) -> NDArray | None: ...
 _COMPONENTS = ("ur", "uz", "ut")
 #: A local extremum of a magnitude curve is marked when it stands out from its surroundings
 #: by this share of the curve's range (scipy.signal.find_peaks prominence).
@@ -42,6 +69,8 @@ def _series(U: NDArray) -> dict[str, Any]:
 def extrema(frequency_hz: NDArray, magnitude: NDArray) -> tuple[NDArray, NDArray]:
     """(resonances, antiresonances): frequencies (Hz) of the interior local maxima and minima
     of a magnitude curve that stand out by :data:`PROMINENCE` of its range."""
+    # Lazy: scipy.signal costs 0.55 s to import (measured beside scipy.sparse), which every
+    # solve would pay through fem.simulation; only a sweep's document needs it.
     from scipy.signal import find_peaks
 
     m = np.asarray(magnitude, dtype=float)
@@ -55,8 +84,6 @@ def extrema(frequency_hz: NDArray, magnitude: NDArray) -> tuple[NDArray, NDArray
 
 def sweep_document(res: SweepResult, scene_name: str | None = None) -> dict[str, Any]:
     """The version-1 JSON document of a sweep (see the module docstring)."""
-    from .scene import scene_hash, scene_to_dict
-
     m = res.meta
     has_edge = res.edge_mm is not None
     doc: dict[str, Any] = {
@@ -139,8 +166,6 @@ def _hz(values: NDArray) -> str:
 def plot_sweep(path: str, res: SweepResult, scene_name: str | None = None) -> None:
     """Magnitude (log) and phase of the centre and the edge against frequency, resonances
     (triangles up) and antiresonances (down) marked, in the shared figure style."""
-    import figstyle
-
     f = res.frequency_hz
     fig, (ax, bx) = figstyle.figure(2, 1, width_in=6.4, height_in=6.0)
     curves = [("centre", res.center)] if res.edge_mm is not None else []

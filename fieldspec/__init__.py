@@ -12,7 +12,7 @@ Units live in the key names (``thickness_mm``, ``E_kPa``); this package converts
 It imports nothing of the project.
 """
 
-from fieldspec.errors import FieldError
+from fieldspec.errors import FieldError, WorkError
 from fieldspec.spec import (
     REQUIRED,
     Context,
@@ -34,6 +34,7 @@ __all__ = [
     "Context",
     "FieldError",
     "Spec",
+    "WorkError",
     "allowed_text",
     "check_interval",
     "is_bool",

@@ -1,4 +1,6 @@
-"""The one error base class of user input validation."""
+"""The two error bases of the project: bad input (:class:`FieldError`) and work that failed
+on valid input (:class:`WorkError`). The command line maps them to its exit codes in one place
+(``hapticrom/cli.py``: 2 and 1)."""
 
 from __future__ import annotations
 
@@ -14,3 +16,11 @@ class FieldError(ValueError):
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
         self.field = field
+
+
+class WorkError(RuntimeError):
+    """The work failed although its input was valid: a solver breakdown, a worker process that
+    died, a device link that went away. The message says what failed and what was kept (the
+    CLI: exit code 1, the message without a traceback). The one sibling of
+    :class:`FieldError`; an unexpected error of any other type is a bug, and the CLI prints
+    its traceback."""

@@ -14,7 +14,10 @@ frequency and what is plotted (quantity, unit, where on the body)::
 
 from __future__ import annotations
 
+import io
+import math
 import os
+import textwrap
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -95,8 +98,6 @@ def caption_text(*, design: str | None, frequency: str | None, plotted: str,
 def annotate(fig: Any, title: str, *, design: str | None, frequency: str | None,
              plotted: str, note: str | None = None) -> None:
     """Put the title on top and the caption (design, frequency, what is plotted) below."""
-    import textwrap
-
     fig.suptitle(title, fontsize=11, fontweight="bold")
     cap = caption_text(design=design, frequency=frequency, plotted=plotted, note=note)
     width = max(60, int(fig.get_figwidth() * 15))
@@ -110,8 +111,6 @@ def annotate(fig: Any, title: str, *, design: str | None, frequency: str | None,
 def plain_log_ticks(ax: Any) -> None:
     """Label a log y axis with plain numbers (2, 5, 10) instead of 2x10^0 and 5x10^0; minor
     ticks are labelled only when the axis spans less than two decades (call after plotting)."""
-    import math
-
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
     fmt = FuncFormatter(lambda v, _: f"{v:g}")
@@ -141,8 +140,6 @@ SOFTWARE = "hapticrom"
 def _save_png(fig: Any, path: str | os.PathLike, kwargs: dict[str, Any]) -> None:
     """A 256-colour palette PNG without dithering: line plots hold far fewer colours, so it
     looks the same at a third of the size (README figures stay well under 150 kB)."""
-    import io
-
     from PIL import Image, PngImagePlugin
 
     buf = io.BytesIO()

@@ -6,7 +6,8 @@ applies the one exit-code policy of the project, the same for every command:
 
 ====  =====================================================================================
 0     success (``--help``, ``--version``; a check that finds nothing wrong)
-1     the work failed (a solver or worker failure, an unexpected error)
+1     the work failed: a :class:`fieldspec.WorkError` (a solver or worker failure, a lost
+      device link: the message, no traceback) or an unexpected error (with its traceback)
 2     bad input: any :class:`fieldspec.FieldError` (the message names the field and the
       allowed range), a ``ValueError`` from the library, an unreadable input or unwritable
       output file, a usage error; nothing is written. A check that finds its input broken
@@ -27,7 +28,10 @@ import os
 import sys
 import traceback
 from collections.abc import Sequence
+from importlib.metadata import PackageNotFoundError, version
 
+from fem import SOLVER_VERSION  # cheap: fem loads its modules lazily
+from fieldspec import FieldError, WorkError
 from hapticrom.commands import COMMANDS
 
 __all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "build_parser", "main",
@@ -43,10 +47,6 @@ class _Parser(argparse.ArgumentParser):
 def version_text() -> str:
     """``hapticrom X (solver Y)``: the installed package version (its metadata) and
     :data:`fem.SOLVER_VERSION`, the version recorded with every result."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    from fem import SOLVER_VERSION  # cheap: fem loads its modules lazily
-
     try:
         package = version("hapticrom")
     except PackageNotFoundError:  # run from a source tree that is not installed
@@ -74,8 +74,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # usage error (2, message printed) or --help (0): return, not exit
         return int(exc.code or EXIT_OK)
-    from fieldspec import FieldError
-
     name = args.command
     try:
         return int(args.func(args) or EXIT_OK)
@@ -85,6 +83,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (FieldError, ValueError, FloatingPointError) as exc:  # bad input, or a model it makes
         print(f"hapticrom {name}: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
+    except WorkError as exc:  # valid input, the work failed: say what, no traceback
+        print(f"hapticrom {name}: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, as cat does
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())  # so that the final flush does not fail again

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from fieldspec import FieldError
+from fieldspec import FieldError, WorkError
 from hardware.protocol import Segment, Status
 from hardware.safety import ExposureMeter, OnTimeGuard, SafetyLimits, check_schedule, clamp_levels
 
@@ -33,7 +33,7 @@ from hardware.schedule import Schedule
 __all__ = ["Device", "DeviceError", "DeviceRefused", "PlaybackInterrupted"]
 
 
-class DeviceError(RuntimeError):
+class DeviceError(WorkError):
     """The link to the device failed (no acknowledgement, disconnected, refused)."""
 
 

@@ -31,8 +31,11 @@ from typing import Any
 
 import numpy as np
 
+from fieldspec import Context, Spec, read_table, require_table
+from fieldspec.toml import read_toml_file
 from hardware.safety import LEVEL_TOLERANCE, SafetyError, SafetyLimits, check_schedule
 from hardware.schedule import PlanFile, Schedule
+from motorlaw import SpeedLaw
 
 __all__ = ["ERM_RATING", "USER_KEYS", "ActuatorRating", "DeviceLimits", "Resolved",
            "load_user_limits", "preflight", "resolve_limits"]
@@ -71,8 +74,6 @@ class ActuatorRating:
 
 
 def _erm_rating() -> ActuatorRating:
-    from motorlaw import SpeedLaw
-
     m = SpeedLaw()
     return ActuatorRating(
         "coin ERM of the shipped models", m.rated_voltage_V, m.rated_frequency_hz,
@@ -159,8 +160,6 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
 def load_user_limits(path: str | Path) -> dict[str, float]:
     """A limits file: TOML with a ``[limits]`` table of ``max_level``, ``max_on_ms``,
     ``max_duty``, ``watchdog_ms``, ``exposure_action_m_s2`` (each optional)."""
-    from fieldspec import Context, Spec, read_table, require_table
-    from fieldspec.toml import read_toml_file
 
     specs = {"max_level": Spec(float, None, "(0, 8]"),
              "max_on_ms": Spec(float, None, "(0, 3.6e6]"),

@@ -27,10 +27,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fieldspec import FieldError
+from fieldspec.documents import read_json_file
 from hardware.pattern import Pattern, PatternError
 from hardware.protocol import Segment
 from planner.drive import drive_levels, rendered
-from planner.plan_record import PlanCheck, PlanRecordError, check_plan
+from planner.paths import resolve_plan_models
+from planner.plan_record import PlanCheck, PlanRecord, PlanRecordError
 
 __all__ = ["ACTIVE_LEVEL", "TIMING_KEYS", "PlanFile", "PlanFileError", "Schedule", "StepDrive",
            "build_schedule", "load_plan", "plan_from_dict"]
@@ -63,18 +65,23 @@ class PlanFile:
 def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
     """Validate a plan mapping (``hapticrom plan --out``) as untrusted input: its record
     (:func:`planner.plan_record.check_plan`: header, every number in its physical range,
-    ``schema`` when given, the digest) and what playing needs."""
+    ``schema`` when given, the digest; read as :class:`planner.plan_record.PlanRecord`) and
+    what playing needs."""
     try:
-        record = check_plan(d, schema)
+        plan = PlanRecord.from_json(d, schema)
     except PlanRecordError as err:
         raise PlanFileError(err.field, str(err)) from None
-    if d.get("best") is None:
+    record = plan.check
+    if plan.best is None:
         raise PlanFileError("best", "the plan has no feasible design (best = null): nothing "
                             "to play; re-plan with wider pitch bounds or another criterion")
+    missing = [k for k in ("crosstalk_um", "positions_mm", "best_frequency_hz") if k not in d]
+    if missing:
+        raise PlanFileError(missing[0], f"plan: missing or malformed {missing[0]!r}")
     try:
-        C = np.asarray(d["crosstalk_um"], dtype=float)
-        pos = np.asarray(d["positions_mm"], dtype=float)
-        freq = float(d["best_frequency_hz"])
+        C = np.asarray(plan.crosstalk_um, dtype=float)
+        pos = np.asarray(plan.positions_mm, dtype=float)
+        freq = float(plan.best_frequency_hz)
     except (KeyError, TypeError, ValueError) as err:
         raise PlanFileError(str(err).strip("'"), f"plan: missing or malformed {err}") from None
     if C.ndim != 2 or C.shape[0] != C.shape[1] or not C.size or not np.all(np.isfinite(C)) \
@@ -84,11 +91,11 @@ def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
     if pos.shape != (len(C), 2):
         raise PlanFileError("positions_mm", f"plan.positions_mm: expected {len(C)} x 2 "
                             "site positions")
-    if "timing" not in d:
+    if "timing" not in d:  # absent (an older plan), not null (timing unavailable)
         raise PlanFileError("timing", "the plan has no 'timing' (rise, decay, overdrive, "
                             "brake, inter-stimulus interval from the transient model): re-plan "
                             "it with the current `hapticrom plan` so that it carries the timing")
-    t = d["timing"]
+    t = plan.timing
     if t is None or (isinstance(t, dict) and t.get("unavailable")):
         why = f" ({t['unavailable']})" if t else ""
         raise PlanFileError("timing", f"the plan's timing is unavailable{why}: play needs the "
@@ -113,9 +120,6 @@ def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
 
 
 def load_plan(path: str | Path, schema: dict[str, Any] | None = None) -> PlanFile:
-    from fieldspec.documents import read_json_file  # size and nesting limits
-    from planner.paths import resolve_plan_models  # model paths are relative to the plan
-
     data = read_json_file(path, PlanFileError, "plan")
     plan = plan_from_dict(data, schema)  # checked as written; then its model paths made usable
     return replace(plan, data=resolve_plan_models(copy.deepcopy(plan.data), path))

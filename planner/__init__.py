@@ -9,7 +9,7 @@ from planner.crosstalk import UnitField, crosstalk_matrix, leakage_ratio, site_p
 from planner.drive import DriveSolution, drive_levels
 from planner.layout import LayoutError, LayoutRequest, layout_from_dict, load_layout
 from planner.optimise import DesignResult, Plan, plan_layout
-from planner.report import plan_to_dict, write_plan_plot
+from planner.report import plan_as_record, plan_to_dict, write_plan_plot
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 from planner.timing import Timing, TimingError, envelope_timing, plan_timing
 
@@ -30,6 +30,7 @@ __all__ = [
            "layout_from_dict",
            "leakage_ratio",
            "load_layout",
+           "plan_as_record",
            "plan_layout",
            "plan_timing",
            "plan_to_dict",

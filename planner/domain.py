@@ -22,7 +22,7 @@ frequency it reaches (169.66 Hz for those numbers); a frequency above it is not 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from planner.layout import LayoutError, short_repr
@@ -96,8 +96,6 @@ class Domain:
     def narrowed_specs(self, specs: list[InputSpec]) -> list[InputSpec]:
         """The harmonic model's input specs with their ranges cut to the domain (candidates
         of ``any = true`` are drawn from these)."""
-        from dataclasses import replace
-
         out = []
         for s in specs:
             b = self.bounds[s.name]

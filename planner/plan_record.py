@@ -26,12 +26,12 @@ import hashlib
 import json
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from fieldspec import FieldError
 
-__all__ = ["DIGEST_KEY", "KIND", "LEGACY_FORMAT", "SCHEMA_VERSION", "PlanCheck",
+__all__ = ["DIGEST_KEY", "KIND", "LEGACY_FORMAT", "SCHEMA_VERSION", "PlanCheck", "PlanRecord",
            "PlanRecordError", "check_plan", "plan_digest", "schema_problems", "seal_plan"]
 
 SCHEMA_VERSION = 1
@@ -219,6 +219,72 @@ def check_plan(d: Any, schema: dict[str, Any] | None = None) -> PlanCheck:
     if recorded is None:
         return PlanCheck("unsealed", None, actual)
     return PlanCheck("sealed" if recorded == actual else "edited", recorded, actual)
+
+
+
+_HEADER = ("schema_version", "kind", DIGEST_KEY, "format", "version")
+
+
+@dataclass(frozen=True)
+class PlanRecord:
+    """``plan.json`` as a typed record, the one form the planner writes and a player reads.
+
+    The keys of ``hapticrom/schemas/plan.json`` are fields (amplitudes in um, positions and
+    pitches in mm, frequencies in Hz; nested parts stay JSON objects, described there and in
+    docs/planner.md); ``extra`` keeps keys this version does not name, so a plan read and
+    written again keeps them. ``check`` is the integrity of a record read from a file
+    (None for one just made). :meth:`to_json` writes it sealed (:func:`seal_plan`);
+    :meth:`from_json` reads it as untrusted input (:func:`check_plan`: header and version,
+    ``schema`` when given, every number in its physical range, the digest)."""
+
+    model: str | None = None
+    array: dict[str, Any] | None = None
+    criterion: dict[str, Any] | None = None
+    site: Any = None
+    candidates: list[dict[str, Any]] = field(default_factory=list)
+    best: str | None = None
+    best_inputs: dict[str, Any] | None = None
+    best_frequency_hz: float | None = None
+    pitch_mm: float | None = None
+    margin: float | None = None
+    positions_mm: list[list[float]] = field(default_factory=list)
+    crosstalk_um: list[list[float]] = field(default_factory=list)
+    leakage_ratio: list[Any] = field(default_factory=list)
+    leakage_um: list[Any] = field(default_factory=list)
+    criterion_load: list[Any] = field(default_factory=list)
+    uncertainty: dict[str, Any] | None = None
+    timing: dict[str, Any] | None = None
+    validity: Any = None
+    dropped_frequencies: list[Any] = field(default_factory=list)
+    not_playable: list[Any] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    verify: dict[str, Any] | None = None
+    tissue: dict[str, Any] | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    check: PlanCheck | None = field(default=None, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plan's content, not yet sealed (``verify``/``tissue`` only when present)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)
+               if f.name not in ("extra", "check")}
+        for key in ("verify", "tissue"):
+            if out[key] is None:
+                del out[key]
+        return {**out, **self.extra}
+
+    def to_json(self) -> dict[str, Any]:
+        """The sealed document: ``schema_version``, ``kind``, the content, ``plan_sha256``."""
+        return seal_plan(self.to_dict())
+
+    @classmethod
+    def from_json(cls, d: Any, schema: dict[str, Any] | None = None) -> PlanRecord:
+        """Read ``d`` (a parsed ``plan.json``) as untrusted input; raises
+        :class:`PlanRecordError` naming the key."""
+        check = check_plan(d, schema)
+        names = {f.name for f in fields(cls)} - {"extra", "check"}
+        known = {k: v for k, v in d.items() if k in names}
+        extra = {k: v for k, v in d.items() if k not in names and k not in _HEADER}
+        return cls(**known, extra=extra, check=check)
 
 
 # ---- the JSON Schema subset of hapticrom/schemas/plan.json ----------------------------------

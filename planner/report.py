@@ -8,9 +8,10 @@ import numpy as np
 
 from planner.figure import write_plan_plot
 from planner.optimise import PITCH_TOL_MM, Z95, Plan
-from planner.plan_record import KIND, SCHEMA_VERSION
+from planner.plan_record import KIND, SCHEMA_VERSION, PlanRecord
+from planner.summary import validity
 
-__all__ = ["plan_to_dict", "write_plan_plot"]
+__all__ = ["plan_as_record", "plan_to_dict", "write_plan_plot"]
 
 
 def _r(x: float | None, digits: int = 4) -> float | None:
@@ -18,10 +19,14 @@ def _r(x: float | None, digits: int = 4) -> float | None:
 
 
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
-    """Everything a user or the play step needs: request, candidates, the chosen array (not
-    yet sealed: ``planner.plan_record.seal_plan`` adds the digest when it is written)."""
-    from planner.summary import validity
+    """The plan's JSON content with its header, not yet sealed (:func:`plan_as_record`'s
+    ``to_json`` adds the digest when it is written)."""
+    return {"schema_version": SCHEMA_VERSION, "kind": KIND, **plan_as_record(plan).to_dict()}
 
+
+def plan_as_record(plan: Plan) -> PlanRecord:
+    """Everything a user or the play step needs: request, candidates, the chosen array, as
+    the typed record of ``plan.json``."""
     req = plan.request
     cands = [{"name": c.name, "frequency_hz": c.frequency_hz, "inputs": c.inputs,
               "center_um": _r(c.center_um), "edge_radius_mm": _r(c.edge_radius_mm),
@@ -50,29 +55,29 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "threshold_um": [round(x, 6) for x in t.threshold_um],
             "at_best_frequency_um": None if best is None else
             _r(float(t(best.frequency_hz)), 6)}
-    return {
-        "schema_version": SCHEMA_VERSION, "kind": KIND, "model": req.model,
-        "array": {"rows": req.rows, "cols": req.cols, "grid": req.grid,
-                  "objective": req.objective, "region_mm": req.region_mm},
-        "criterion": criterion,
-        "site": req.site, "candidates": cands,
-        "best": None if best is None else best.name,
-        "best_inputs": None if best is None else best.inputs,
-        "best_frequency_hz": None if best is None else best.frequency_hz,
-        "pitch_mm": None if best is None else _r(best.pitch_mm, 3),
-        "margin": _r(plan.margin),
-        "positions_mm": np.round(plan.positions_mm, 4).tolist(),
-        "crosstalk_um": np.round(plan.crosstalk_um, 6).tolist(),
-        "leakage_ratio": np.round(plan.ratios, 6).tolist(),
-        "leakage_um": np.round(plan.leakage_um, 6).tolist(),
-        "criterion_load": np.round(plan.loads, 6).tolist(),
-        "uncertainty": None if best is None else uncertainty(plan),
-        "timing": plan.timing,
-        "validity": validity(plan),
-        "dropped_frequencies": plan.dropped,
-        "not_playable": plan.unplayable,
-        "warnings": crit.warnings(),
-    }
+    return PlanRecord(
+        model=req.model,
+        array={"rows": req.rows, "cols": req.cols, "grid": req.grid,
+               "objective": req.objective, "region_mm": req.region_mm},
+        criterion=criterion,
+        site=req.site, candidates=cands,
+        best=None if best is None else best.name,
+        best_inputs=None if best is None else best.inputs,
+        best_frequency_hz=None if best is None else best.frequency_hz,
+        pitch_mm=None if best is None else _r(best.pitch_mm, 3),
+        margin=_r(plan.margin),
+        positions_mm=np.round(plan.positions_mm, 4).tolist(),
+        crosstalk_um=np.round(plan.crosstalk_um, 6).tolist(),
+        leakage_ratio=np.round(plan.ratios, 6).tolist(),
+        leakage_um=np.round(plan.leakage_um, 6).tolist(),
+        criterion_load=np.round(plan.loads, 6).tolist(),
+        uncertainty=None if best is None else uncertainty(plan),
+        timing=plan.timing,
+        validity=validity(plan),
+        dropped_frequencies=plan.dropped,
+        not_playable=plan.unplayable,
+        warnings=crit.warnings(),
+    )
 
 
 def uncertainty(plan: Plan) -> dict[str, Any]:

@@ -25,8 +25,9 @@ import numpy as np
 import onnx
 from onnx import helper, numpy_helper
 from scipy.linalg import solve_triangular
+from sklearn.gaussian_process.kernels import RBF, Matern
 
-__all__ = ["MAX_IR_VERSION", "export_gp", "export_nn", "set_metadata"]
+__all__ = ["MAX_IR_VERSION", "export_gp", "export_nn", "finish_model", "set_metadata"]
 
 #: onnx >= 1.23 writes IR 14 by default; onnxruntime 1.31 reads at most 13.
 MAX_IR_VERSION = 10
@@ -43,7 +44,8 @@ def set_metadata(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> onnx.Mo
     return model
 
 
-def _finish(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
+def finish_model(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
+    """The serialised, checked graph: IR version capped for onnxruntime, metadata set."""
     model.ir_version = min(model.ir_version, MAX_IR_VERSION)
     set_metadata(model, metadata)
     onnx.checker.check_model(model)
@@ -53,6 +55,7 @@ def _finish(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
 def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
               metadata: Mapping[str, Any]) -> bytes:
     """ONNX bytes of a fitted :class:`surrogate.nn.MLPEnsembleRegressor` (float32 input)."""
+    # Lazy: torch costs 3.9 s to import; the GP's paths (surrogate.refine) need none of it.
     import torch
 
     module = estimator.to_module(B, b)
@@ -64,13 +67,11 @@ def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
     buf = io.BytesIO()
     program.save(buf, external_data=False) if hasattr(program, "save") else None
     model = onnx.load_from_string(buf.getvalue())
-    return _finish(model, metadata)
+    return finish_model(model, metadata)
 
 
 def _gp_parts(gp: Any) -> dict[str, Any]:
     """Constants of a fitted ``amplitude * ARD(rbf|matern52) + white`` GaussianProcessRegressor."""
-    from sklearn.gaussian_process.kernels import RBF, Matern
-
     k = gp.kernel_
     amp, core, noise = k.k1.k1.constant_value, k.k1.k2, k.k2.noise_level
     if isinstance(core, Matern) and core.nu == 2.5:
@@ -179,4 +180,4 @@ def export_gp(estimator: Any, B: np.ndarray, b: np.ndarray,
                      for n, v in consts.items()])
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", GP_OPSET)],
                               producer_name="hapticrom")
-    return _finish(model, metadata)
+    return finish_model(model, metadata)

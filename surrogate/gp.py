@@ -25,9 +25,11 @@ from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, Matern, WhiteKernel
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from surrogate.export import export_gp
+from surrogate.kind import SurrogateKind
 from surrogate.params import check_choice, check_number
 
-__all__ = ["KERNELS", "GPSurrogateRegressor"]
+__all__ = ["KERNELS", "KIND", "POD_MODES", "GPSurrogateRegressor"]
 
 #: Kernels offered; both export to ONNX (surrogate.export) with a parity test each.
 KERNELS = ("rbf", "matern52")
@@ -124,3 +126,20 @@ class GPSurrogateRegressor(RegressorMixin, BaseEstimator):
         """The fitted kernel of every target, as text."""
         check_is_fitted(self)
         return [str(gp.kernel_) for gp in self.gps_]
+
+
+#: POD modes a GP learns by default (one GP each; the ONNX graph holds an N x N matrix per
+#: target, so each mode costs N^2 doubles of model size).
+POD_MODES = 4
+
+
+def _card_extras(est: GPSurrogateRegressor) -> dict[str, Any]:
+    return {"gp_kernels": est.kernels(), "gp_rows_used": int(est.n_train_)}
+
+
+#: float64 graph: the GP std, a difference of nearly equal numbers near the data, agrees with
+#: scikit-learn to about 1e-5 in log amplitude (the tolerance leaves a margin of 10).
+KIND = SurrogateKind(
+    name="gp", summary="Gaussian processes with predictive std (harmonic amplitudes)",
+    estimator=GPSurrogateRegressor, export=export_gp, parity_tol=1e-4, dtype="float64",
+    std_parity=True, pod_modes=POD_MODES, card_extras=_card_extras)

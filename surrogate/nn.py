@@ -20,9 +20,11 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from surrogate.export import export_nn
+from surrogate.kind import SurrogateKind
 from surrogate.params import check_number
 
-__all__ = ["EnsembleModule", "MLPEnsembleRegressor"]
+__all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor"]
 
 
 class EnsembleModule(torch.nn.Module):
@@ -225,3 +227,22 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
                 break
     return ([k.clone() for k in kept[:len(weights)]], [k.clone() for k in kept[len(weights):]],
             best_epoch.tolist())
+
+
+def _in_memory(est: MLPEnsembleRegressor, B: np.ndarray,
+               b: np.ndarray) -> Any:
+    """The ensemble's torch module with the output map, float32 in, log outputs out."""
+    module = est.to_module(B, b)
+
+    def run(X: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return module(torch.as_tensor(X, dtype=torch.float32))[0].double().numpy()
+
+    return run
+
+
+#: float32 graph of the ensemble; its std is the members' spread, compared through the mean.
+KIND = SurrogateKind(
+    name="nn", summary="MLP ensemble in torch with the members' spread as std (harmonic "
+    "amplitudes)", estimator=MLPEnsembleRegressor, export=export_nn, parity_tol=1e-4,
+    dtype="float32", engine="torch", in_memory=_in_memory)

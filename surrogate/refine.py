@@ -21,7 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.generate import generate
+from surrogate.data.plan import plan_samples
+from surrogate.data.store import Store
+from surrogate.features import codes_from_frame
+from surrogate.gp import GPSurrogateRegressor
 from surrogate.runtime.encoding import encode
+from surrogate.train import load_datasets
 
 __all__ = ["RefineReport", "refine", "select_batch", "uncertainty"]
 
@@ -43,8 +49,6 @@ class RefineReport:
 def fit_log_amplitudes(X: np.ndarray, center_um: np.ndarray, edge_um: np.ndarray,
                        seed: int = 0, max_train: int = MAX_GP_ROWS) -> Any:
     """A GP on (log center, log edge) amplitudes of feature rows ``X``."""
-    from surrogate.gp import GPSurrogateRegressor
-
     T = np.column_stack([np.log(center_um), np.log(edge_um)])
     return GPSurrogateRegressor(max_train=max_train, random_state=seed).fit(X, T)
 
@@ -79,12 +83,6 @@ def select_batch(score: np.ndarray, X: np.ndarray, k: int,
 
 def _round(path: Path, batch: int, seed: int, workers: int | None, progress: bool,
            command: str) -> dict[str, Any]:
-    from surrogate.data.generate import generate
-    from surrogate.data.plan import plan_samples
-    from surrogate.data.store import Store
-    from surrogate.features import codes_from_frame
-    from surrogate.train import load_datasets
-
     data = load_datasets([path])
     X = encode(data.codes, data.specs)
     model = fit_log_amplitudes(X, data.center_um, data.profile_um[:, 0], seed)

@@ -21,6 +21,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from surrogate.runtime import load_model
 from surrogate.runtime.card import (
     CARD_NAME,
     FORMAT,
@@ -141,13 +142,8 @@ def check_model(path: str | Path) -> dict[str, Any]:
     """The card of model directory ``path`` after loading it as it will be used: the
     directory verified as a whole, then the graph (gp, nn) or coefficients (rom) checked by
     their run-time loader; :class:`ModelFileError` naming the file and the check otherwise."""
-    from surrogate.runtime import load_envelope_model, load_predictor
-
     card = read_card(path)
-    if card.get("kind") == "rom":
-        load_envelope_model(path)
-    else:
-        load_predictor(path)
+    load_model(path)  # the run-time form the card's contract names (graph, coefficients)
     return card
 
 

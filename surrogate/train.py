@@ -2,6 +2,9 @@
 
     card = train(["datasets/default"], kind="nn", out="models/default-nn")
 
+The kinds (their estimators, exporters and parity tolerances) come from the registry
+:mod:`surrogate.kinds`; a kind with a pipeline of its own (``rom``) is handed to it.
+
 Inputs are the free parameters of the datasets' space (:mod:`surrogate.features`), targets
 the log center amplitude and the POD coefficients of the log profile
 (:mod:`surrogate.pod`). A seeded random ``test_fraction`` of the rows is held out; the
@@ -20,7 +23,10 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.store import Store, profile_matrix
+from surrogate.data.worker import edge_radius_mm
 from surrogate.features import codes_from_frame, input_specs
+from surrogate.kind import SurrogateKind
 from surrogate.pod import ProfileTargets, output_columns
 from surrogate.registry import (
     check_model_out,
@@ -31,15 +37,8 @@ from surrogate.registry import (
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import Predictor, make_session
 
-__all__ = ["KINDS", "TrainingData", "edge_radius_rule", "evaluate", "load_datasets", "train"]
+__all__ = ["TrainingData", "edge_radius_rule", "evaluate", "fit_kind", "load_datasets", "train"]
 
-KINDS = ("gp", "nn")
-#: POD modes a GP learns by default (one GP each; the ONNX graph holds an N x N matrix per
-#: target, so each mode costs N^2 doubles of model size).
-GP_POD_MODES = 4
-#: Largest |d ln| between the exported graph and the estimator: float32 NN, float64 GP (the
-#: GP std, a difference of nearly equal numbers near the data, agrees to about 1e-5).
-PARITY_TOL = {"nn": 1e-4, "gp": 1e-4}
 PREDICTS = ("Harmonic steady-state vibration amplitude of a haptic unit on the skin surface: "
             "at the center, at the unit's edge, their ratio, and the amplitude-distance "
             "profile outside the edge")
@@ -61,8 +60,6 @@ class TrainingData:
 def _edge_radius(df: Any) -> np.ndarray:
     """The unit's outer radius [mm] of every row: the dataset's column when it has one, else
     derived from the row's resolved scene by the solver's scene model."""
-    from surrogate.data.worker import edge_radius_mm
-
     stored = (df["edge_radius_mm"].to_numpy(dtype=float, copy=True)
               if "edge_radius_mm" in df.columns else np.full(len(df), np.nan))
     missing = np.isnan(stored)
@@ -87,8 +84,6 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -
     numeric ranges are united), each dataset in its design-sequence order (``sample_index``;
     the order of the stored parts depends on which worker finished first), so the held-out
     split and the first n rows are the same on every machine."""
-    from surrogate.data.store import Store
-
     if not paths:
         raise ValueError("--data: give at least one dataset")
     specs: list[InputSpec] | None = None
@@ -120,8 +115,6 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot") -
     assert specs is not None and grid is not None
     if grid.size < 2:
         raise ValueError("the datasets have no profile grid (profile_grid_mm)")
-    from surrogate.data.store import profile_matrix
-
     codes = np.concatenate([codes_from_frame(df, specs) for df in parts])
     center = np.concatenate([df["center_amplitude_um"].to_numpy(float) for df in parts])
     profile = np.concatenate([profile_matrix(df, grid) for df in parts])
@@ -181,41 +174,37 @@ def evaluate(pred: dict[str, np.ndarray], center_um: np.ndarray,
     return out
 
 
-def _fit(kind: str, X: np.ndarray, T: np.ndarray, seed: int, options: dict[str, Any]) -> Any:
-    if kind == "nn":
-        from surrogate.nn import MLPEnsembleRegressor
-
-        return MLPEnsembleRegressor(random_state=seed, **options).fit(X, T)
-    if kind == "gp":
-        from surrogate.gp import GPSurrogateRegressor
-
-        return GPSurrogateRegressor(random_state=seed, **options).fit(X, T)
-    raise ValueError(f"--kind {kind!r}: allowed {', '.join(KINDS)}")
-
-
-def _export(kind: str, est: Any, B: np.ndarray, b: np.ndarray, meta: dict[str, Any]) -> bytes:
-    from surrogate.export import export_gp, export_nn
-
-    return (export_nn if kind == "nn" else export_gp)(est, B, b, meta)
+def fit_kind(kind: SurrogateKind, X: np.ndarray, T: np.ndarray, seed: int,
+             options: dict[str, Any]) -> Any:
+    """The fitted estimator of ``kind`` (``options``: its parameters, ``--options``)."""
+    assert kind.estimator is not None, f"{kind.name} has a pipeline of its own"
+    return kind.estimator(random_state=seed, **options).fit(X, T)
 
 
 def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
           test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
           overwrite: bool = False, categorical: str = "onehot",
           options: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Train a ``kind`` ("gp" or "nn") model on ``paths``, write ``out``; return its card."""
-    if kind not in KINDS:
-        raise ValueError(f"--kind {kind!r}: allowed {', '.join(KINDS)}")
+    """Train a ``kind`` model (a name of :data:`surrogate.kinds.KINDS`) on ``paths``, write
+    ``out``; return its card."""
+    # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
+    # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
+    from surrogate.kinds import get as get_kind
+
+    spec = get_kind(kind)
+    if spec.trainer is not None:
+        return spec.trainer(paths, out, seed=seed, overwrite=overwrite,
+                            options=dict(options or {}))
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     data = load_datasets(paths, categorical=categorical)
     tr, te = split(len(data.codes), test_fraction, seed)
     X = encode(data.codes, data.specs)
-    if n_modes is None and kind == "gp":
-        n_modes = min(GP_POD_MODES, data.grid_mm.size)
+    if n_modes is None and spec.pod_modes is not None:
+        n_modes = min(spec.pod_modes, data.grid_mm.size)
     targets = ProfileTargets(n_modes=n_modes)
     T = targets.fit_transform(data.center_um[tr], data.profile_um[tr])
     B, b = targets.output_map()
-    est = _fit(kind, X[tr], T, seed, dict(options or {}))
+    est = fit_kind(spec, X[tr], T, seed, dict(options or {}))
     card: dict[str, Any] = {
         "kind": kind, "predicts": PREDICTS,
         "inputs": [s.to_dict() for s in data.specs],
@@ -227,7 +216,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
         "log_output_columns": output_columns(data.grid_mm.size),
         "profile_distance_mm": data.grid_mm.tolist(),
         "edge_radius": edge_radius_rule(data.codes, data.specs, data.edge_radius_mm),
-        "graph": {"file": "model.onnx", "dtype": "float32" if kind == "nn" else "float64",
+        "graph": {"file": "model.onnx", "dtype": spec.dtype,
                   "input": "x", "outputs": ["log_mean", "log_std"]},
         "training_data": data.sources,
         "training": {"rows": int(tr.size), "held_out": int(te.size), "seed": seed,
@@ -237,33 +226,32 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
         "versions": package_versions()}
     meta = {k: card[k] for k in ("kind", "inputs", "outputs", "profile_distance_mm",
                                  "training_data")}
-    onnx_bytes = _export(kind, est, B, b, meta)
+    assert spec.export is not None
+    onnx_bytes = spec.export(est, B, b, meta)
     predictor = Predictor({**card, "files": {}}, make_session(onnx_bytes))
-    card["export_parity_max_abs_dln"] = _parity(kind, est, predictor, X[te], B, b)
+    card["export_parity_max_abs_dln"] = _parity(spec, est, predictor, X[te], B, b)
     card["metrics"] = evaluate(predictor.predict(data.codes[te]), data.center_um[te],
                                data.profile_um[te])
-    if kind == "gp":
-        card["training"]["gp_kernels"] = est.kernels()
-        card["training"]["gp_rows_used"] = int(est.n_train_)
+    card["training"].update(spec.card_extras(est))
     write_model(out, card, {"model.onnx": onnx_bytes}, overwrite=overwrite)
     return card
 
 
-def _parity(kind: str, est: Any, predictor: Predictor, X: np.ndarray, B: np.ndarray,
+def _parity(kind: SurrogateKind, est: Any, predictor: Predictor, X: np.ndarray, B: np.ndarray,
             b: np.ndarray) -> float:
     """Largest |d ln| between the graph and the estimator (mean and std); raises above the
     tolerance, so a wrong export never reaches the registry."""
     mean, std = est.predict(X, return_std=True)
     ref_mean = mean @ B + b
-    ref_std = np.sqrt((std**2) @ B**2) if kind == "gp" else None
+    ref_std = np.sqrt((std**2) @ B**2) if kind.std_parity else None
     got_mean, got_std = predictor.session.run(
         ["log_mean", "log_std"], {"x": X.astype(predictor._dtype)})
     worst = float(np.abs(got_mean - ref_mean).max())
     if ref_std is not None:
         worst = max(worst, float(np.abs(got_std - ref_std).max()))
-    if not worst <= PARITY_TOL[kind]:
-        raise RuntimeError(f"exported {kind} graph differs from the estimator by {worst:.3g} "
-                           f"in log amplitude (tolerance {PARITY_TOL[kind]})")
+    if not worst <= kind.parity_tol:
+        raise RuntimeError(f"exported {kind.name} graph differs from the estimator by "
+                           f"{worst:.3g} in log amplitude (tolerance {kind.parity_tol})")
     return worst
 
 

@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from hapticrom.outputs import atomic_path, check_output_file
+
 DEFAULT_OUT = "docs/accuracy-vs-time.md"
 
 
@@ -29,8 +31,6 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the study, then write the report and the plot (each atomically)."""
-    from hapticrom.outputs import atomic_path, check_output_file
-
     out = Path(args.out)
     if out.suffix != ".md":
         raise ValueError(f"--out {args.out}: must name a .md file (the plot goes beside it)")

@@ -21,6 +21,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from hapticrom.commands._args import number_in, positive_int
 from hapticrom.outputs import atomic_path, check_output_file
 
@@ -130,8 +132,6 @@ def _dataset_path(model: str) -> Path:
 def _verify(cal: Any, model: str) -> dict[str, Any]:
     """FE solve at the posterior mean for every measured frequency; FE, surrogate and measured
     amplitude at each point."""
-    import numpy as np
-
     from fem import simulate
     from fem.results import magnitude
     from fem.scene import scene_from_dict

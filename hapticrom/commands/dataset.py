@@ -14,6 +14,9 @@ import json
 import sys
 from typing import Any
 
+from hapticrom.documents import dataset_info_document
+from hapticrom.outputs import check_not_input
+
 
 def register(subparsers: Any) -> None:
     """Add the ``dataset`` sub-parser and its three sub-commands."""
@@ -47,8 +50,6 @@ def run_info(args: argparse.Namespace) -> int:
 
     info = dataset_info(args.path)
     if args.json:
-        from hapticrom.documents import dataset_info_document
-
         print(json.dumps(dataset_info_document(info), indent=1))
     else:
         print(format_info(info))
@@ -104,7 +105,6 @@ def run_validate(args: argparse.Namespace) -> int:
 
 def run_merge(args: argparse.Namespace) -> int:
     """Merge the inputs into a new dataset."""
-    from hapticrom.outputs import check_not_input
     from surrogate.data.inspect import merge_datasets
 
     check_not_input("--out", args.out, args.inputs)

@@ -18,6 +18,7 @@ import functools
 import json
 import shutil
 import subprocess
+import webbrowser
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, ClassVar
@@ -33,16 +34,16 @@ SOURCES = ("lib/hapticrom-model.mjs", "explorer/app.mjs", "explorer/array.mjs",
 def _sealed_model(model: str) -> tuple[Path, dict[str, Any]]:
     """The model's directory and card, its files verified and its card sealed."""
     from surrogate.runtime.card import ModelFileError, read_card
-    from surrogate.runtime.models import find_model
+    from surrogate.runtime.models import find_model, is_steady_state
 
     path = find_model(model).resolve()
     card = read_card(path)
     if not isinstance(card.get("card_sha256"), str):
         raise ModelFileError("card_sha256", f"{path}: the card is not sealed (no card_sha256); "
                              "the explorer refuses unsealed cards (docs/embedding.md)")
-    if card.get("kind") not in ("nn", "gp"):
+    if not is_steady_state(card):
         raise ModelFileError("kind", f"{path}: a {card.get('kind')!r} model; the explorer "
-                             "shows steady-state predictors (kind 'nn' or 'gp')")
+                             "shows steady-state predictors (a card with an ONNX graph)")
     return path, card
 
 
@@ -111,8 +112,6 @@ def _run(args: argparse.Namespace) -> int:
     url = f"http://{args.host}:{server.server_address[1]}/"
     print(f"serving the design explorer at {url} (Ctrl-C to stop)", flush=True)
     if args.open:
-        import webbrowser
-
         webbrowser.open(url)
     try:
         server.serve_forever()

@@ -28,6 +28,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from hapticrom.outputs import atomic_path, check_output_file
 
 __all__ = ["EXIT_VERIFY_FAILED", "register"]
@@ -119,9 +121,9 @@ def _print_plan(plan: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from planner import load_layout, plan_layout, plan_to_dict, write_plan_plot
+    from planner import load_layout, plan_as_record, plan_layout, write_plan_plot
     from planner.paths import relative_plan_models
-    from planner.plan_record import seal_plan
+    from planner.plan_record import PlanRecord
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
@@ -143,13 +145,11 @@ def _run(args: argparse.Namespace) -> int:
     if verify is not None:
         _print_verify(verify)
     if args.out:
-        doc = relative_plan_models(plan_to_dict(plan), args.out)
-        if args.verify:
-            doc["verify"] = verify
-        if tissue is not None:
-            doc["tissue"] = spread
+        doc = relative_plan_models(plan_as_record(plan).to_dict(), args.out)
+        record = PlanRecord(**doc, verify=verify if args.verify else None,
+                            tissue=spread if tissue is not None else None)
         with atomic_path(args.out) as tmp:
-            tmp.write_text(json.dumps(seal_plan(doc), indent=1) + "\n")
+            tmp.write_text(json.dumps(record.to_json(), indent=1) + "\n")
         print(f"wrote {args.out}")
     if args.plot:
         with atomic_path(args.plot) as tmp:
@@ -177,8 +177,6 @@ def _dataset_path(model: str) -> Path:
 def _verify(plan: Any) -> dict[str, Any]:
     """FE re-solve of the chosen design; surrogate vs FE amplitudes and implied pitches, and
     the verdict on the plan's own criterion at the planned pitch."""
-    import numpy as np
-
     from planner.crosstalk import UnitField
     from planner.optimise import is_felt, smallest_pitch, worst_load
     from surrogate.data.store import Store

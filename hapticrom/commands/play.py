@@ -26,7 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from fieldspec import FieldError
 from hapticrom.commands._args import number_in
+from hapticrom.documents import schema
 from hapticrom.outputs import check_dir_output, check_not_input, write_dir
 
 __all__ = ["register"]
@@ -93,17 +95,16 @@ def _prepare(dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
           "used as the nearest guide)")
 
 
-def _play(kind: str, dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
+def _play(kind: Any, dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
           meter: Any) -> BaseException | None:
     """Run the session on ``dev``; a refusal or an interruption is recorded on the device and
     returned (the caller decides what is kept); anything else propagates."""
-    from fieldspec import FieldError
     from hardware import Heartbeat
     from hardware.device import PlaybackInterrupted
 
     try:
         _prepare(dev, args, plan, schedule, meter)
-        if kind == "serial":
+        if kind.live:  # a live array stops itself if the host goes quiet
             with Heartbeat(dev):
                 dev.play(schedule)
         else:
@@ -119,10 +120,11 @@ def _play(kind: str, dev: Any, args: argparse.Namespace, plan: Any, schedule: An
     return None
 
 
-def _serial(args: argparse.Namespace, plan: Any, schedule: Any, meter: Any,
-            record: Any) -> BaseException | None:
-    """Play on ``serial:PORT``: the outcome of :func:`_play`, or the link lost while stopping
-    after the pattern (a PlaybackInterrupted too: the pattern had been played)."""
+def _live(kind: Any, args: argparse.Namespace, plan: Any, schedule: Any, meter: Any,
+          record: Any) -> BaseException | None:
+    """Play on a live array (``serial:PORT``): the outcome of :func:`_play`, or the link lost
+    while stopping after the pattern (a PlaybackInterrupted too: the pattern had been
+    played)."""
     from hardware import DeviceError, open_device
     from hardware.device import PlaybackInterrupted
     from hardware.playback import playback_report
@@ -132,7 +134,7 @@ def _serial(args: argparse.Namespace, plan: Any, schedule: Any, meter: Any,
     dev = open_device(args.device, plan, None, None, meter, record=record)
     try:
         with dev:
-            outcome = _play("serial", dev, args, plan, schedule, meter)
+            outcome = _play(kind, dev, args, plan, schedule, meter)
             played = outcome is None
             if played:
                 level = max(map(abs, dev.status().levels))
@@ -147,20 +149,13 @@ def _serial(args: argparse.Namespace, plan: Any, schedule: Any, meter: Any,
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hapticrom.documents import schema
-    from hardware import (
-        ExposureMeter,
-        build_schedule,
-        load_pattern,
-        load_plan,
-        open_device,
-        parse_device,
-    )
+    from hardware import ExposureMeter, build_schedule, load_pattern, load_plan, open_device
+    from hardware.backends import device_kind
 
-    kind, _ = parse_device(args.device)
-    if kind != "serial" and not args.out:
-        raise ValueError(f"--device {kind} writes files: give --out DIR")
-    if args.out and kind == "serial":  # a folder of session records, added to
+    kind, _ = device_kind(args.device)
+    if kind.writes_files and not args.out:
+        raise ValueError(f"--device {kind.name} writes files: give --out DIR")
+    if args.out and kind.live:  # a folder of session records, added to
         check_not_input("--out", args.out, [args.plan, args.pattern])
     elif args.out:
         check_dir_output("--out", args.out, kind="play", overwrite=args.overwrite,
@@ -168,13 +163,12 @@ def _run(args: argparse.Namespace) -> int:
     plan = load_plan(args.plan, schema("plan"))
     schedule = build_schedule(load_pattern(args.pattern), plan)
     _user_limits(args)  # a bad limits file is refused before any device is opened
-    meter = ExposureMeter(plan.n_sites, state_path=args.exposure_file if kind == "serial"
-                          else None)
+    meter = ExposureMeter(plan.n_sites, state_path=args.exposure_file if kind.live else None)
     err = max(float(np.abs(s.rendered_um - s.target_um).max()) for s in schedule.steps)
     print(f"{len(schedule.steps)} steps, {len(schedule.segments)} segments, "
           f"{schedule.total_ms} ms at {schedule.frequency_hz:g} Hz on {plan.n_sites} channels; "
           f"largest rendering error {err:.3g} um")
-    if kind == "serial":
+    if kind.live:
         record = None
         if args.out:
             from hardware.playback import JsonLines
@@ -183,7 +177,7 @@ def _run(args: argparse.Namespace) -> int:
             stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%S.%fZ")
             record = JsonLines(Path(args.out) / f"session-{stamp}.jsonl", "x")
         try:
-            outcome = _serial(args, plan, schedule, meter, record)
+            outcome = _live(kind, args, plan, schedule, meter, record)
         finally:
             if record is not None:
                 record.close()
@@ -194,7 +188,7 @@ def _run(args: argparse.Namespace) -> int:
                        reads=[args.plan, args.pattern]) as tmp:
             with open_device(args.device, plan, tmp) as dev:
                 outcome = _play(kind, dev, args, plan, schedule, meter)
-            if outcome is not None and kind != "log":
+            if outcome is not None and not kind.keeps_refusal:
                 raise outcome  # nothing to keep: the sim draws only what it played
             names = sorted(p.name for p in tmp.iterdir())  # before the marker is added
         for name in names:

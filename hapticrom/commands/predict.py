@@ -16,6 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from hapticrom.documents import predict_document
+from hapticrom.outputs import atomic_path, check_output_file
+
 __all__ = ["register"]
 
 
@@ -45,7 +48,6 @@ def _value(text: str) -> Any:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from hapticrom.outputs import atomic_path, check_output_file
     from surrogate.runtime import load_predictor
 
     if args.json:
@@ -61,8 +63,6 @@ def _run(args: argparse.Namespace) -> int:
               f"normalized edge {out['normalized_edge'][i]:.4g} "
               f"(log std {out['center_amplitude_um_log_std'][i]:.2g}){flag}")
     if args.json:
-        from hapticrom.documents import predict_document
-
         doc = predict_document(args.model, p.card, points, out, p.profile_distance_mm)
         with atomic_path(args.json) as tmp:
             tmp.write_text(json.dumps(doc, indent=1) + "\n")

@@ -17,6 +17,11 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.data.plan import Planned
+from surrogate.data.store import Store
+from surrogate.runtime.encoding import encode
+from surrogate.train import load_datasets, split
+
 __all__ = ["DATASET", "N_DESIGNS", "N_QUICK", "Design", "StudyData", "load_study_data",
            "pick_designs"]
 
@@ -27,13 +32,12 @@ N_QUICK = 3
 
 
 @dataclass(frozen=True)
-class Design:
-    """One design: its dataset row, parameter values and the resolved scene it was solved as."""
+class Design(Planned):
+    """One design point of the dataset, the record the dataset was planned with
+    (:class:`surrogate.data.plan.Planned`: sequence ``index``, ``sample_id``, parameter
+    ``values``, resolved ``scene``), and its ``row`` in the study's arrays."""
 
     row: int
-    sample_id: str
-    params: dict[str, Any]
-    scene: dict[str, Any]
 
 
 @dataclass
@@ -53,10 +57,6 @@ class StudyData:
 
 def load_study_data(path: str | Path = DATASET) -> StudyData:
     """Read ``path`` with the training loader and the columns the study needs beside it."""
-    from surrogate.data.store import Store
-    from surrogate.runtime.encoding import encode
-    from surrogate.train import load_datasets, split
-
     data = load_datasets([path])
     df = Store.open(path).read(columns=["sample_id", "sample_index", "status", "wall_s",
                                         "scene_json"])
@@ -66,7 +66,8 @@ def load_study_data(path: str | Path = DATASET) -> StudyData:
     tr, te = split(len(data.codes), 0.2, 0)  # the split of `hapticrom train`
     return StudyData(data, encode(data.codes, data.specs), tr, te,
                      df["wall_s"].to_numpy(float), df["scene_json"].tolist(),
-                     df["sample_id"].tolist())
+                     df["sample_id"].tolist(),
+                     {"sample_index": df["sample_index"].astype(int).tolist()})
 
 
 def pick_designs(sd: StudyData, n: int) -> list[Design]:
@@ -85,7 +86,9 @@ def pick_designs(sd: StudyData, n: int) -> list[Design]:
     for j in picked:
         row = int(sd.test[j])
         params = {s.name: _value(s, sd.data.codes[row, k]) for k, s in enumerate(sd.data.specs)}
-        out.append(Design(row, sd.sample_id[row], params, json.loads(sd.scene_json[row])))
+        index = sd.extras.get("sample_index", range(len(sd.sample_id)))[row]
+        out.append(Design(int(index), sd.sample_id[row], params, json.loads(sd.scene_json[row]),
+                          row))
     return out
 
 

@@ -17,6 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from fem import SceneError, scene_from_dict
+from fem.problem import resolve_effects
+
 from .designs import Design
 from .fe_ladder import solve
 from .metric import errors, summary
@@ -33,9 +36,6 @@ def variants(base: dict[str, Any]) -> dict[str, dict[str, Any] | None]:
     """Scene dicts by variant name: "all effects" (``base``), "no EFFECT" for each effect the
     scene contains (None when it has none to switch off), "fixed side (no absorber)" and
     "order 1 elements"."""
-    from fem import scene_from_dict
-    from fem.problem import resolve_effects
-
     on = resolve_effects(scene_from_dict(base))
     out: dict[str, dict[str, Any] | None] = {"all effects": base}
     for effect in EFFECTS:
@@ -57,8 +57,6 @@ def variants(base: dict[str, Any]) -> dict[str, dict[str, Any] | None]:
 def audit(designs: Sequence[Design], grid_mm: np.ndarray, repeat: int) -> list[dict[str, Any]]:
     """One row per variant: designs where it applies / was refused, median time ratio to all
     effects, and the summary of its change of the answer over the designs it applies to."""
-    from fem import SceneError
-
     per: dict[str, dict[str, Any]] = {}
     for des in designs:
         vs = variants(des.scene)

@@ -16,6 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from fem import SceneError, scene_from_dict, simulate
+from fem.scene.model import Analysis, MeshSettings
+from fem.scene.unit_model import Motor
+
 from .designs import Design
 from .metric import Answer, answer_from_result, errors, summary
 from .timing import timed
@@ -43,8 +47,6 @@ TRANSIENT = {"time_step_ms": 0.2, "duration_ms": 100.0, "window_ms": 10.0, "orde
 def scene_at(base: dict[str, Any], level: float | None, order: int) -> dict[str, Any]:
     """A copy of scene dict ``base`` at mesh ``level`` (None: the base mesh as is) and
     element ``order``."""
-    from fem.scene.model import MeshSettings
-
     d = copy.deepcopy(base)
     mesh = d.setdefault("mesh", {})
     mesh["order"] = order
@@ -57,8 +59,6 @@ def scene_at(base: dict[str, Any], level: float | None, order: int) -> dict[str,
 
 def solve(scene: dict[str, Any], grid_mm: np.ndarray, repeat: int) -> tuple[Answer, float, int]:
     """(answer, median wall time [s] of the full solve, unknowns) of a harmonic scene dict."""
-    from fem import scene_from_dict, simulate
-
     sc = scene_from_dict(scene)
     res, t = timed(lambda: simulate(sc), repeat)
     return answer_from_result(res, grid_mm), t, int(res.meta["dofs"])
@@ -102,15 +102,11 @@ def transient_answer(scene: dict[str, Any],
     per-component peaks over the last :data:`TRANSIENT` window; (answer with an empty
     profile, median wall time [s], unknowns, unsettled = largest relative change of the
     center and edge peaks from the window before the last to the last)."""
-    from fem import scene_from_dict, simulate
-
     d = scene_at(scene, None, TRANSIENT["order"])
     f = float(d["analysis"].get("frequency_hz", 120.0))
     unit = d["unit"]
     motor = unit.setdefault("motor", {})
     motor["rated_frequency_hz"] = f
-    from fem.scene.model import Analysis  # defaults only
-    from fem.scene.unit_model import Motor
 
     volts = motor.get("rated_voltage_V", Motor.__dataclass_fields__["rated_voltage_V"].default)
     d["analysis"] = {"kind": "transient", "time_step_ms": TRANSIENT["time_step_ms"],
@@ -142,8 +138,6 @@ def transient_rows(designs: Sequence[Design], refs: Sequence[Answer],
     profile of a transient run is a peak over the whole run, spin-up included). Designs the
     solver refuses to run in time (a bare unit on frictionless pins has nothing holding it
     sideways) are counted in ``refused``; no row at all when every design is refused."""
-    from fem import SceneError
-
     same, total, times, h_times, dofs, unsettled, refused = [], [], [], [], [], [], 0
     for des, ref in zip(designs, refs, strict=True):
         try:

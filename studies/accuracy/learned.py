@@ -1,8 +1,9 @@
 """The learned models on the study's designs: each way of running them, its error against the
 converged FE reference and its time per answer.
 
-Paths: the GP in scikit-learn (float64) and as its ONNX graph (float64); the NN ensemble in
-torch eager (float32) and as its ONNX graph (float32), plus the full run-time path
+Paths, for every kind the study trains (a steady-state kind of :mod:`surrogate.kinds`): the
+estimator in memory (its kind's ``engine``: scikit-learn float64, torch float32) and its ONNX
+graph (the kind's dtype); plus, for one kind (``runtime_kind``), the full run-time path
 :meth:`surrogate.runtime.predictor.Predictor.predict` (input checks, encoding, ONNX). Every
 path is timed at batch 1 (one design per call) and at a large batch (time per row). One
 thread everywhere (onnxruntime sessions from ``make_session``, ``torch.set_num_threads(1)``).
@@ -10,10 +11,15 @@ thread everywhere (onnxruntime sessions from ``make_session``, ``torch.set_num_t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
+import torch
+
+from surrogate import kinds
+from surrogate.runtime.predictor import Predictor, make_session
+from surrogate.train import edge_radius_rule
 
 from .designs import Design, StudyData
 from .learning_curves import Fitted, heldout_errors
@@ -25,12 +31,11 @@ __all__ = ["BATCH", "BATCH_QUICK", "learned_rows"]
 #: Rows of the large-batch timing.
 BATCH = 10000
 BATCH_QUICK = 1000
+#: Wall time [s] the batch-1 timing of one path aims at (5..300 calls).
+SINGLE_BUDGET_S = 0.05
 
 
-def _predictor(sd: StudyData, session: Any, dtype: str) -> Any:
-    from surrogate.runtime.predictor import Predictor
-    from surrogate.train import edge_radius_rule
-
+def _predictor(sd: StudyData, session: Any, dtype: str) -> Predictor:
     d = sd.data
     card = {"inputs": [s.to_dict() for s in d.specs], "graph": {"dtype": dtype},
             "profile_distance_mm": d.grid_mm.tolist(),
@@ -38,66 +43,65 @@ def _predictor(sd: StudyData, session: Any, dtype: str) -> Any:
     return Predictor(card, session)
 
 
-def learned_rows(gp: Fitted, nn: Fitted, sd: StudyData, designs: Sequence[Design],
-                 refs: Sequence[Answer], batch: int) -> tuple[list[dict[str, Any]],
-                                                              dict[str, float]]:
-    """Rows (method, seconds per answer, error summary on the designs, held-out median) and
-    the export parity (largest |d ln| of ONNX vs in-memory, held-out rows, per model)."""
-    import torch
+def _paths(m: Fitted, sd: StudyData, runtime: bool) -> tuple[
+        list[tuple[str, Callable[[np.ndarray], np.ndarray], bool]], float]:
+    """(label, function, takes codes) of each way to run ``m``, and the export parity (largest
+    |d ln| of ONNX vs in memory on the held-out rows)."""
+    spec = kinds.get(m.kind, "kind", steady=True)
+    assert spec.export is not None
+    sess = make_session(spec.export(m.est, m.B, m.b, {}))
+    dtype = np.dtype(spec.dtype)
+    in_memory = spec.in_memory(m.est, m.B, m.b)
 
-    from surrogate.export import export_gp, export_nn
-    from surrogate.runtime.predictor import make_session
+    def onnx(X: np.ndarray) -> np.ndarray:
+        return sess.run(["log_mean"], {"x": X.astype(dtype)})[0].astype(float)
 
+    name = m.kind.upper()
+    paths = [(f"{name} {spec.engine}", in_memory, False), (f"{name} ONNX", onnx, False)]
+    if runtime:
+        pred = _predictor(sd, sess, spec.dtype)
+
+        def predict(codes: np.ndarray) -> np.ndarray:
+            out = pred.predict(codes)
+            return np.log(np.column_stack([out["center_amplitude_um"], out["edge_amplitude_um"],
+                                           out["normalized_edge"], out["profile_um"]]))
+
+        paths.append((f"{name} Predictor.predict (checks + ONNX)", predict, True))
+    Xt = sd.X[sd.test]
+    return paths, float(np.abs(onnx(Xt) - in_memory(Xt)).max())
+
+
+def _single_calls(fn: Callable[[np.ndarray], Any], one: np.ndarray) -> int:
+    """How many batch-1 calls fit :data:`SINGLE_BUDGET_S`, from one call's time."""
+    t = median_us(lambda: fn(one), 1, repeat=1) * 1e-6
+    return int(np.clip(SINGLE_BUDGET_S / max(t, 1e-9), 5, 300))
+
+
+def learned_rows(fitted: Mapping[str, Fitted], sd: StudyData, designs: Sequence[Design],
+                 refs: Sequence[Answer], batch: int, runtime_kind: str | None = None
+                 ) -> tuple[list[dict[str, Any]], dict[str, float]]:
+    """Rows (method, seconds per answer, error summary on the designs, held-out median) of
+    every path of every fitted kind, and the export parity per kind."""
     torch.set_num_threads(1)
     rows_d = np.array([des.row for des in designs])
     Xd = sd.X[rows_d]
-    gp_sess = make_session(export_gp(gp.est, gp.B, gp.b, {}))
-    nn_sess = make_session(export_nn(nn.est, nn.B, nn.b, {}))
-    module = nn.est.to_module(nn.B, nn.b)
-    pred = _predictor(sd, nn_sess, "float32")
-
-    def sk_gp(X: np.ndarray) -> np.ndarray:
-        return gp.est.predict(X) @ gp.B + gp.b
-
-    def onnx_gp(X: np.ndarray) -> np.ndarray:
-        return gp_sess.run(["log_mean"], {"x": X.astype(np.float64)})[0]
-
-    def torch_nn(X: np.ndarray) -> np.ndarray:
-        with torch.no_grad():
-            return module(torch.as_tensor(X, dtype=torch.float32))[0].double().numpy()
-
-    def onnx_nn(X: np.ndarray) -> np.ndarray:
-        return nn_sess.run(["log_mean"], {"x": X.astype(np.float32)})[0].astype(float)
-
-    def runtime_nn(codes: np.ndarray) -> np.ndarray:
-        out = pred.predict(codes)
-        return np.log(np.column_stack([out["center_amplitude_um"], out["edge_amplitude_um"],
-                                       out["normalized_edge"], out["profile_um"]]))
-
-    Xt = sd.X[sd.test]
-    parity = {"gp": float(np.abs(onnx_gp(Xt) - sk_gp(Xt)).max()),
-              "nn": float(np.abs(onnx_nn(Xt) - torch_nn(Xt)).max())}
-    held = {"gp": heldout_errors(gp, sd)["worst_median"],
-            "nn": heldout_errors(nn, sd)["worst_median"]}
     big = np.repeat(sd.X, batch // len(sd.X) + 1, axis=0)[:batch]
     big_codes = np.repeat(sd.data.codes, batch // len(sd.X) + 1, axis=0)[:batch]
-    paths = [("GP scikit-learn", "gp", sk_gp, False), ("GP ONNX", "gp", onnx_gp, False),
-             ("NN torch", "nn", torch_nn, False), ("NN ONNX", "nn", onnx_nn, False),
-             ("NN Predictor.predict (checks + ONNX)", "nn", runtime_nn, True)]
-    out = []
-    for name, kind, fn, codes in paths:
-        src = sd.data.codes[rows_d] if codes else Xd
-        a = answer_from_log(fn(src))
-        errs = [errors(Answer(a.center_um[i], a.edge_um[i], a.profile_um[i]), r)
-                for i, r in enumerate(refs)]
-        one = src[:1]
-        n1 = 20 if kind == "gp" else 300
-        t1 = median_us(lambda fn=fn, one=one: fn(one), n1) * 1e-6
-        bsrc = big_codes if codes else big
-        tb = median_us(lambda fn=fn, bsrc=bsrc: fn(bsrc), 1, repeat=3) * 1e-6 / batch
-        fitted = gp if kind == "gp" else nn
-        for label, t in (("batch 1", t1), (f"batch {batch}", tb)):
-            out.append({"method": f"{name}, {label}", "kind": kind, "seconds": t,
-                        "n_train": fitted.n, "train_s": fitted.train_s,
-                        "heldout_worst_median": held[kind], **summary(errs)})
+    out, parity = [], {}
+    for kind, m in fitted.items():
+        paths, parity[kind] = _paths(m, sd, kind == runtime_kind)
+        held = heldout_errors(m, sd)["worst_median"]
+        for name, fn, codes in paths:
+            src = sd.data.codes[rows_d] if codes else Xd
+            a = answer_from_log(fn(src))
+            errs = [errors(Answer(a.center_um[i], a.edge_um[i], a.profile_um[i]), r)
+                    for i, r in enumerate(refs)]
+            one = src[:1]
+            t1 = median_us(lambda fn=fn, one=one: fn(one), _single_calls(fn, one)) * 1e-6
+            bsrc = big_codes if codes else big
+            tb = median_us(lambda fn=fn, bsrc=bsrc: fn(bsrc), 1, repeat=3) * 1e-6 / batch
+            for label, t in (("batch 1", t1), (f"batch {batch}", tb)):
+                out.append({"method": f"{name}, {label}", "kind": kind, "seconds": t,
+                            "n_train": m.n, "train_s": m.train_s,
+                            "heldout_worst_median": held, **summary(errs)})
     return out, parity

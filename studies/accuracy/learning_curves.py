@@ -1,5 +1,6 @@
 """What a learned model costs to get: held-out error against the number of FE samples and
-against total compute (generation + training), for the GP and the NN.
+against total compute (generation + training), for every kind the study trains (GP, NN and
+the scikit-learn MLP baseline by default; :func:`curves`).
 
 Each size n trains on the first n training rows of the shipped dataset in its Sobol design
 order (what a dataset of n samples would hold) and is measured on all held-out rows (the split
@@ -19,19 +20,35 @@ from typing import Any
 
 import numpy as np
 
+from surrogate import kinds
+from surrogate.pod import ProfileTargets
+
 from .designs import StudyData
 from .metric import Answer, answer_from_log, errors, summary
 
-__all__ = ["GP_SIZES", "NN_SIZES", "Fitted", "curve", "fit", "heldout_errors", "samples_for"]
+__all__ = ["GP_SIZES", "NN_SIZES", "RUNTIME_KIND", "Fitted", "curve", "curves", "fit",
+           "heldout_errors", "samples_for"]
 
-#: Training sizes (FE samples). The GP stops at 500 rows, the size of the shipped gp-default
-#: (its O(n^3) fit takes tens of seconds there); the NN goes to every training row.
+#: Training sizes (FE samples) and options of each kind the study trains. The GP stops at 500
+#: rows, the size of the shipped gp-default (its O(n^3) fit takes tens of seconds there); the
+#: NN and the MLP baseline go to every training row.
 GP_SIZES = (64, 128, 256, 500)
 NN_SIZES = (256, 512, 1024, 3277)
 GP_SIZES_QUICK = (32, 64)
 NN_SIZES_QUICK = (64, 128)
 #: NN options of ``--quick`` (a smoke test of the pipeline, not a converged model).
 NN_QUICK_OPTIONS = {"max_epochs": 30, "n_members": 2}
+MLP_QUICK_OPTIONS = {"max_iter": 200}
+#: The kind also timed through the full run-time predictor.
+RUNTIME_KIND = "nn"
+
+
+def curves(quick: bool) -> dict[str, tuple[tuple[int, ...], dict[str, Any]]]:
+    """Kind -> (training sizes, options) of a full or a ``quick`` run."""
+    if quick:
+        return {"gp": (GP_SIZES_QUICK, {}), "nn": (NN_SIZES_QUICK, dict(NN_QUICK_OPTIONS)),
+                "mlp": (NN_SIZES_QUICK, dict(MLP_QUICK_OPTIONS))}
+    return {"gp": (GP_SIZES, {}), "nn": (NN_SIZES, {}), "mlp": (NN_SIZES, {})}
 
 
 @dataclass
@@ -47,27 +64,22 @@ class Fitted:
 
 
 def fit(kind: str, sd: StudyData, n: int, options: dict[str, Any] | None = None) -> Fitted:
-    """Train ``kind`` ("gp" or "nn", the defaults of ``hapticrom train``) on the first ``n``
-    training rows; time the fit (targets included) [s]."""
-    from surrogate.gp import GPSurrogateRegressor
-    from surrogate.nn import MLPEnsembleRegressor
-    from surrogate.pod import ProfileTargets
-    from surrogate.train import GP_POD_MODES
-
+    """Train ``kind`` (a steady-state kind of :mod:`surrogate.kinds`, with the defaults of
+    ``hapticrom train``) on the first ``n`` training rows; time the fit (targets included) [s].
+    An estimator that subsamples (``max_train``) is told to use all ``n`` rows."""
+    spec = kinds.get(kind, "kind", steady=True)
     if not 2 <= n <= sd.train.size:
         raise ValueError(f"n = {n}: allowed 2..{sd.train.size} training rows")
     rows = sd.train[:n]
     d = sd.data
     t0 = time.perf_counter()
-    targets = ProfileTargets(n_modes=GP_POD_MODES if kind == "gp" else None)
+    targets = ProfileTargets(n_modes=spec.pod_modes)
     T = targets.fit_transform(d.center_um[rows], d.profile_um[rows])
-    opts = dict(options or {})
-    if kind == "gp":
-        est = GPSurrogateRegressor(random_state=0, max_train=max(n, 2), **opts).fit(sd.X[rows], T)
-    elif kind == "nn":
-        est = MLPEnsembleRegressor(random_state=0, **opts).fit(sd.X[rows], T)
-    else:
-        raise ValueError(f"kind = {kind!r}: allowed gp, nn")
+    assert spec.estimator is not None
+    est = spec.estimator(random_state=0, **dict(options or {}))
+    if "max_train" in est.get_params():
+        est.set_params(max_train=max(n, 2))
+    est.fit(sd.X[rows], T)
     B, b = targets.output_map()
     return Fitted(kind, est, B, b, n, time.perf_counter() - t0)
 

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fem.results import magnitude
+
 __all__ = ["PARTS", "Answer", "answer_from_log", "answer_from_result", "errors", "summary"]
 
 #: The parts of the error, in report order.
@@ -38,8 +40,6 @@ class Answer:
 def answer_from_result(res, grid_mm: np.ndarray) -> Answer:
     """The answer of a harmonic :class:`fem.simulation.SimulationResult`, its profile
     interpolated onto ``grid_mm`` (distances from the edge, mm)."""
-    from fem.results import magnitude
-
     prof = np.interp(grid_mm, res.profile_mm, magnitude(res.profile) * 1e6)
     return Answer(np.asarray(res.center_amplitude_um), np.asarray(res.edge_amplitude_um), prof)
 

@@ -11,6 +11,7 @@ import platform
 from typing import Any
 
 import figstyle
+from surrogate.registry import package_versions
 
 from .designs import DATASET
 from .fe_ladder import TRANSIENT
@@ -24,8 +25,6 @@ TARGET = 0.01
 
 def machine() -> dict[str, str]:
     """CPU model, cores, load, OS, Python and package versions of this run."""
-    from surrogate.registry import package_versions
-
     cpu = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo") as f:
@@ -78,9 +77,9 @@ def write_plot(res: dict[str, Any]) -> bytes:
     groups = [("FE order 1", [r for r in res["fe"] if r["order"] == 1 and r["level"]], "o-"),
               ("FE order 2", [r for r in res["fe"] if r["order"] == 2 and r["level"]], "s-"),
               ("FE default mesh", [r for r in res["fe"] if not r["level"]], "D"),
-              ("FE transient", res["transient"], "v"),
-              ("GP", [r for r in res["learned"] if r["kind"] == "gp"], "^"),
-              ("NN", [r for r in res["learned"] if r["kind"] == "nn"], "P")]
+              ("FE transient", res["transient"], "v")]
+    groups += [(kind.upper(), [r for r in res["learned"] if r["kind"] == kind], marker)
+               for kind, marker in zip(res["curves"], "^PX*hd", strict=False)]
     for label, rows, style in groups:
         if rows:
             ax.plot([r["seconds"] for r in rows], [max(r["worst_median"], 1e-6) for r in rows],
@@ -122,8 +121,7 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
         L.append(f"- Fastest way to {_pct(TARGET)} error ({what} over the designs): "
                  + (f"**{p['method']}**, {_t(p['seconds'])} per answer "
                     f"(error {_pct(p[key])})." if p else "none of the methods measured."))
-    for kind in ("gp", "nn"):
-        o = res["one_percent"][kind]
+    for kind, o in res["one_percent"].items():
         if o["n"] is None:
             txt = "the held-out error does not fall with n on the measured sizes"
         elif o["extrapolated"]:
@@ -143,10 +141,10 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
           f"{len(res['designs'])} held-out rows of `{DATASET.relative_to(DATASET.parents[1])}` "
           "(split of `hapticrom train`), picked by farthest-point sampling in the encoded "
           "feature box from the row nearest its centre (`studies/accuracy/designs.py`).", ""]
-    names = list(res["designs"][0].params)
+    names = list(res["designs"][0].values)
     L += ["| row | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
     for d in res["designs"]:
-        L.append(f"| {d.row} | " + " | ".join(_fmt(d.params[n]) for n in names) + " |")
+        L.append(f"| {d.row} | " + " | ".join(_fmt(d.values[n]) for n in names) + " |")
     L += ["", "## Every way to get an answer", "",
           "Time per answer: FE = one full solve (mesh, assembly, factorisation, solve), median "
           f"of {s.repeat} runs per design, median over designs; learned models = median call "
@@ -173,8 +171,8 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
           f"{_pct(tr['unsettled_max'])} from the window before the last to the last (the "
           "part of the difference that is start-up not yet decayed, not discretisation).", ""]
     L += ["Export parity (largest |d ln amplitude| between the ONNX graph and the in-memory "
-          f"model on the held-out rows): GP {res['parity']['gp']:.2g}, NN "
-          f"{res['parity']['nn']:.2g}.", ""]
+          "model on the held-out rows): " + ", ".join(
+              f"{kind.upper()} {p:.2g}" for kind, p in res["parity"].items()) + ".", ""]
     L += ["## Cost of the model: learning curves", "",
           f"Held-out error on all {res['n_test']} held-out rows (against the dataset's FE "
           "answers) after training on the first n rows in Sobol order. Generation = the "
@@ -184,13 +182,14 @@ def render(res: dict[str, Any], png_name: str, command: str) -> str:
           "| model | FE samples | generation | training | total | error median | "
           "error p95 | center median | edge median | profile L2 median |",
           "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in (*res["gp_curve"], *res["nn_curve"]):
+    for r in (r for rows in res["curves"].values() for r in rows):
         L.append(f"| {r['kind'].upper()} | {r['n']} | {_t(r['generation_s'])} | "
                  f"{_t(r['train_s'])} | {_t(r['total_s'])} | {_pct(r['worst_median'])} | "
                  f"{_pct(r['worst_p95'])} | {_pct(r['center_median'])} | "
                  f"{_pct(r['edge_median'])} | {_pct(r['profile_median'])} |")
-    if s.nn_options:
-        L.append(f"\nNN options of this run: {s.nn_options}.")
+    for kind, (_, options) in s.curves.items():
+        if options:
+            L.append(f"\n{kind.upper()} options of this run: {options}.")
     L += ["", "## Effects audit", "",
           "Each optional effect switched off alone, on every design that contains it; the change "
           "is the error metric of that answer against the all-effects answer on the same mesh, "
@@ -215,7 +214,8 @@ def _more_findings(res: dict[str, Any]) -> list[str]:
     """Findings on the learned models, the transient and the effects, from the tables."""
     out = []
     fe_default = next(r for r in res["fe"] if not r["level"])
-    for kind, label in (("nn", "NN"), ("gp", "GP")):
+    for kind in res["curves"]:
+        label = kind.upper()
         rows = [r for r in res["learned"] if r["kind"] == kind]
         if not rows:
             continue

@@ -14,15 +14,16 @@ __all__ = ["Settings", "run_study"]
 
 @dataclass(frozen=True)
 class Settings:
-    """What one run measures (``quick``: CI-sized)."""
+    """What one run measures (``quick``: CI-sized). ``curves``: every learned kind the study
+    trains (a steady-state kind of :mod:`surrogate.kinds`) -> its training sizes and options;
+    ``runtime_kind`` is also timed through the full run-time predictor."""
 
     n_designs: int
     levels: tuple[float, ...]
     ref_level: float
     repeat: int
-    gp_sizes: tuple[int, ...]
-    nn_sizes: tuple[int, ...]
-    nn_options: dict[str, Any] = field(default_factory=dict)
+    curves: dict[str, tuple[tuple[int, ...], dict[str, Any]]] = field(default_factory=dict)
+    runtime_kind: str = learning_curves.RUNTIME_KIND
     batch: int = learned.BATCH
     quick: bool = False
 
@@ -30,15 +31,16 @@ class Settings:
     def make(cls, quick: bool) -> Settings:
         if quick:
             return cls(N_QUICK, fe_ladder.LEVELS_QUICK, fe_ladder.REF_LEVEL_QUICK, 1,
-                       learning_curves.GP_SIZES_QUICK, learning_curves.NN_SIZES_QUICK,
-                       dict(learning_curves.NN_QUICK_OPTIONS), learned.BATCH_QUICK, True)
+                       learning_curves.curves(quick=True), batch=learned.BATCH_QUICK,
+                       quick=True)
         return cls(N_DESIGNS, fe_ladder.LEVELS, fe_ladder.REF_LEVEL, 3,
-                   learning_curves.GP_SIZES, learning_curves.NN_SIZES)
+                   learning_curves.curves(quick=False))
 
 
 def run_study(quick: bool = False, log: Any = print) -> dict[str, Any]:
-    """Measure everything; return plain data for :func:`studies.accuracy.report.write_report`.
-    ``log`` receives one line per finished stage."""
+    """Measure everything; return plain data for :func:`studies.accuracy.report.write_report`
+    (the learning curves of kind K under ``curves[K]`` and ``K_curve``). ``log`` receives one
+    line per finished stage."""
     s = Settings.make(quick)
     t0 = time.perf_counter()
     sd = load_study_data()
@@ -53,15 +55,14 @@ def run_study(quick: bool = False, log: Any = print) -> dict[str, Any]:
     log(f"transient done ({time.perf_counter() - t0:.0f} s)")
     eff = effects.audit(designs, grid, s.repeat)
     log(f"effects audit done ({time.perf_counter() - t0:.0f} s)")
-    gp_curve, gp = learning_curves.curve("gp", sd, s.gp_sizes)
-    log(f"GP learning curve done ({time.perf_counter() - t0:.0f} s)")
-    nn_curve, nn = learning_curves.curve("nn", sd, s.nn_sizes, s.nn_options)
-    log(f"NN learning curve done ({time.perf_counter() - t0:.0f} s)")
-    lr, parity = learned.learned_rows(gp, nn, sd, designs, refs, s.batch)
+    curves, fitted = {}, {}
+    for kind, (sizes, options) in s.curves.items():
+        curves[kind], fitted[kind] = learning_curves.curve(kind, sd, sizes, options)
+        log(f"{kind.upper()} learning curve done ({time.perf_counter() - t0:.0f} s)")
+    lr, parity = learned.learned_rows(fitted, sd, designs, refs, s.batch, s.runtime_kind)
     log(f"learned models timed ({time.perf_counter() - t0:.0f} s)")
     return {"settings": s, "designs": designs, "ref_dofs": ref_dofs, "fe": fe, "transient": tr,
-            "effects": eff, "gp_curve": gp_curve, "nn_curve": nn_curve,
-            "one_percent": {"gp": learning_curves.samples_for(gp_curve),
-                            "nn": learning_curves.samples_for(nn_curve)},
+            "effects": eff, "curves": curves, **{f"{k}_curve": v for k, v in curves.items()},
+            "one_percent": {k: learning_curves.samples_for(v) for k, v in curves.items()},
             "learned": lr, "parity": parity, "n_train": int(sd.train.size),
             "n_test": int(sd.test.size), "wall_s": time.perf_counter() - t0}

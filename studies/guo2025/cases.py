@@ -14,12 +14,13 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
+
+from fem.problem import resolve_effects
+from fem.scene import SceneError, load_scene, scene_from_dict, scene_to_dict
 
 from .paper import COMMON, LETTERS, TABLE2_DENSITY, TABLE3_E_KPA, TABLE4_NU
-
-if TYPE_CHECKING:
-    from .run import Solved
+from .solved import Solved
 
 #: The prototype scenes the cases start from, shipped as package data.
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"
@@ -77,8 +78,6 @@ def _set(d: dict, path: str, value: Any) -> None:
 
 def scene_dict(case: Case, scenes_dir: Path = SCENES_DIR) -> dict:
     """The TOML-shaped dict of ``case``: its example, the edits, the fine profile sampling."""
-    from fem.scene import load_scene, scene_to_dict
-
     d = scene_to_dict(load_scene(Path(scenes_dir) / case.base))
     _set(d, "output.profile_step_mm", PROFILE_STEP_MM)
     for path, value in case.edits:
@@ -97,8 +96,6 @@ def scene_dict(case: Case, scenes_dir: Path = SCENES_DIR) -> dict:
 
 def case_scene(case: Case, scenes_dir: Path = SCENES_DIR):
     """The validated scene ``case`` solves (what the report describes)."""
-    from fem.scene import scene_from_dict
-
     return scene_from_dict(scene_dict(case, scenes_dir))
 
 
@@ -115,8 +112,6 @@ def _undamped(d: dict) -> None:
 @functools.lru_cache(maxsize=8)
 def example_scene(name: str, scenes_dir: Path = SCENES_DIR):
     """The example scene ``name`` as loaded (its defaults are what every study starts from)."""
-    from fem.scene import load_scene
-
     return load_scene(Path(scenes_dir) / name)
 
 
@@ -293,9 +288,6 @@ def rejection(case: Case, kind: str, scenes_dir: Path = SCENES_DIR) -> str | Non
     """The solver's reason for refusing ``case`` as a ``kind`` ("static" or "transient")
     analysis, or None if it accepts it. It refuses a unit on frictionless pins that nothing
     holds sideways: a static solve is singular, a spin-up from rest drifts away."""
-    from fem.problem import resolve_effects
-    from fem.scene import SceneError, scene_from_dict
-
     d = scene_dict(replace(case, transient=kind == "transient"), scenes_dir)
     if kind == "static":
         d["analysis"]["kind"] = "static"

@@ -29,7 +29,7 @@ from .paper import (
     PAPER_TRIPLE_MAX,
     PAPER_TRIPLE_MIN,
 )
-from .run import Solved
+from .solved import Solved
 from .studies import range_verdict, rotor_mm
 from .text import Section, design, gap_phrase, md_table, near, pct, um
 

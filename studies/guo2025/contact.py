@@ -6,10 +6,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 
+from fem.scene import RING_GAP_MM
+
 from .cases import RING_CONTACTS, Context, contact_name, is_posed, posed_text, refused_kinds
 from .checks import readings
 from .paper import LETTERS, PAPER_POGO_RATIO, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct, um, verdict
 
 
@@ -106,7 +108,6 @@ def check_ring_contact(r: Mapping[str, Solved], triples: Sequence[str], ctx: Con
     study = study_contact_triples(r, triples)
     if not study:
         return None
-    from fem.scene import RING_GAP_MM
 
     order = [default, *(c for c in RING_CONTACTS if c != default)]
     names = [*(f"single/{c}" for c in LETTERS), *(f"triple/{t}" for t in study), "acd/glued"]

@@ -6,10 +6,12 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from fem.materials import get_material
+
 from .cases import BARE, MOTOR_VARIANTS, Context
 from .checks import readings
 from .paper import LETTERS, PAPER_POGO_RATIO, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .studies import rotor_mm, sweep_label
 from .text import REL_TOL, Section, near, pct, um
 
@@ -155,8 +157,6 @@ def _discuss_transient(checks: Mapping[str, Section]) -> str | None:
 
 
 def _discuss_rest(sections: Mapping[str, Section], checks: Mapping[str, Section]) -> list[str]:
-    from fem.materials import get_material
-
     lines = []
     if "f" in checks:
         f = checks["f"].data

@@ -21,7 +21,7 @@ from .cases import (
 )
 from .contact import contact_label, study_contact_triples
 from .paper import LDV_BAND_HZ, LETTERS, PAPER_SINGLE_RANGE, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .studies import sweep_label
 from .text import design
 

@@ -7,20 +7,19 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from fem import SOLVER_VERSION
+from fem.materials import get_material
+from fem.scene import RING_GAP_MM
 
 from .cases import RING_CONTACTS, TRIPLE, Case, Context, case_scene, is_posed, refused_kinds
 from .contact import CONTACT_DEFS, closest_text
 from .paper import LETTERS, PAPER_TRIPLE_MAX, PAPER_TRIPLE_MIN
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct
 
 COMMAND = "hapticrom reproduce --out reports/reproduce"
 
 
 def _model_text(r: Mapping[str, Solved], ctx: Context) -> str:
-    from fem.materials import get_material
-    from fem.scene import RING_GAP_MM
-
     scene, default = ctx.example(TRIPLE), ctx.default
     t, u, mesh = scene.tissue, scene.unit, scene.mesh
     m, pg, b = u.motor, u.pogo, u.board

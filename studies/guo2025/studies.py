@@ -10,6 +10,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from fem.materials import Material, get_material
+
 from .cases import (
     BARE,
     ELASTICITY_STEP,
@@ -33,7 +35,7 @@ from .paper import (
     PAPER_TRIPLE_MAX,
     PAPER_TRIPLE_MIN,
 )
-from .run import Solved
+from .solved import Solved
 from .text import REL_TOL, Section, design, md_table, near, pct, um, verdict
 
 # --------------------------------------------------------------------------- studies
@@ -106,8 +108,6 @@ def study_pogo(r: Mapping[str, Solved], ctx: Context) -> Section:
 
 
 def _material_row(letter: str) -> tuple[float, float, float]:
-    from fem.materials import get_material
-
     m = get_material(LETTERS[letter])
     return m.E_Pa / 1e3, m.density_kg_m3, m.nu
 
@@ -318,7 +318,6 @@ def _bulk_text(sweeps: Mapping[str, Sequence[float]]) -> str:
     """The end of the sweep discussion: how far the Poisson table moves the bulk modulus."""
     if "nu" not in sweeps:
         return "show."
-    from fem.materials import Material
 
     lo, hi = min(sweeps["nu"]), max(sweeps["nu"])
     E_Pa, rho = COMMON[1] * 1e3, COMMON[0]

@@ -31,7 +31,8 @@ from .discussion import discussion_text
 from .figures import write_figures
 from .outdir import check_out_dir, write_report_dir
 from .report import _model_text, closest_summary, render
-from .run import Solved, run_cases
+from .run import run_cases
+from .solved import Solved
 from .studies import (
     study_context,
     study_orientation,

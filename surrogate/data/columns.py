@@ -28,13 +28,10 @@ solver's 1e-3 error tolerance), frequency-major:
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 import pyarrow as pa
-
-if TYPE_CHECKING:
-    from surrogate.data.space import Space
 
 __all__ = ["COMPLEX_FIELDS", "COMPONENTS", "OUTPUT_FIELDS", "PROVENANCE_FIELDS",
            "SWEEP_FIELDS", "arrow_schema", "complex_columns", "profile_matrix",
@@ -90,6 +87,14 @@ SWEEP_FIELDS = (
        for where in ("center", "edge", "profile") for c in COMPONENTS for part in ("re", "im")]
     + [pa.field("sweep_error_estimate", pa.float64()),
        pa.field("sweep_full_solves", pa.int64())])
+
+
+class Space(Protocol):
+    """What the columns depend on of a space (:class:`surrogate.data.space.Space` is one;
+    the space's parameters are made of these columns, so this module does not import it)."""
+
+    parameters: tuple[Any, ...]
+    band: Any
 
 
 def arrow_schema(space: Space) -> pa.Schema:

@@ -27,15 +27,12 @@ import hashlib
 import re
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
-
-if TYPE_CHECKING:
-    from surrogate.data.store import Store
 
 __all__ = ["PART_RE", "TMP_RE", "PartCheck", "check_parts", "file_sha256", "part_entry",
            "rows_digest", "stray_files"]
@@ -122,6 +119,16 @@ def stray_files(path: Path, listed: Mapping[str, Any]) -> list[str]:
             continue
         out.append(p.name + ("/" if p.is_dir() else ""))
     return out
+
+
+class Store(Protocol):
+    """What the part checks read of a dataset (:class:`surrogate.data.store.Store` is one;
+    the store runs these checks, so this module does not import it)."""
+
+    path: Path
+    manifest: dict[str, Any]
+
+    def part_path(self, name: str) -> Path | None: ...
 
 
 def check_parts(store: Store, deep: bool = False) -> PartCheck:

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from fieldspec import WorkError
 from surrogate.data.backends import DaskBackend, PoolBackend
 from surrogate.data.errors import DatasetError, SpaceError
 from surrogate.data.plan import Planned, PlanStats, plan_samples
@@ -73,7 +74,7 @@ GROUP_BY_TOPOLOGY = True
 _SCHEDULER_RE = re.compile(r"^(tcp|tls)://[^\s:/]+:\d{1,5}$")
 
 
-class RunnerError(RuntimeError):
+class RunnerError(WorkError):
     """The execution backend failed (a worker process died, a Dask worker was lost).
     Completed samples were saved; rerun the same command to resume."""
 

@@ -46,8 +46,10 @@ from typing import Any
 
 import numpy as np
 
+from fem.scene import SceneError, scene_hash, scene_to_dict
 from surrogate.data.errors import DatasetError
 from surrogate.data.provenance import solver_info
+from surrogate.data.simulate_json import read_simulate_json
 from surrogate.data.space import Space, SpaceError, load_space
 from surrogate.data.store import Store, new_manifest
 
@@ -198,8 +200,6 @@ def _open_target(out: str | Path, space: Space | str | Path | None) -> tuple[Sto
 
 
 def _scene_row(space: Space, values: Mapping[str, Any], where: str) -> tuple[str, str]:
-    from fem.scene import scene_hash, scene_to_dict
-
     cols = {k: np.asarray([v], dtype=object) for k, v in values.items()}
     for c in space.constraints:
         if not c.evaluate(cols)[0]:
@@ -234,8 +234,6 @@ def _check_values(space: Space, raw: Mapping[str, Any], where: str) -> dict[str,
 
 def _choice_scenes(space: Space, name: str) -> dict[str, str]:
     """Scene hash of the space's center with each choice of categorical ``name``."""
-    from fem.scene import scene_hash
-
     p = next(q for q in space.parameters if q.name == name)
     center = space.center()
     return {scene_hash(space.scene({**center, name: c})): c for c in p.choices}
@@ -244,8 +242,6 @@ def _choice_scenes(space: Space, name: str) -> dict[str, str]:
 def _same_scene_choice(space: Space, name: str, value: Any) -> Any:
     """The choice of categorical ``name`` that resolves to the same scene as ``value`` (a
     material alias such as "A" for "ecoflex-00-10", as scene files accept), else None."""
-    from fem.scene import SceneError, scene_hash
-
     p = next(q for q in space.parameters if q.name == name)
     if p.type != "categorical" or not p.free or not isinstance(value, str):
         return None
@@ -317,7 +313,6 @@ def ingest_profile(path: str | Path, out: str | Path, values: Mapping[str, Any],
     vals = _check_values(space, values, where)
     center = None
     if path.suffix.lower() == ".json":  # a `hapticrom simulate --json` result (old or new)
-        from surrogate.data.simulate_json import read_simulate_json
 
         dist, amp, center = read_simulate_json(path)
     else:

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from fem.scene import SceneError, scene_from_dict, scene_hash
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
@@ -163,8 +164,6 @@ def _check_ranges(space: Space, df: Any) -> list[str]:
 
 
 def _check_hashes(df: Any) -> list[str]:
-    from fem.scene import SceneError, scene_from_dict, scene_hash
-
     problems = []
     for sid, text in zip(df["sample_id"], df["scene_json"], strict=True):
         try:

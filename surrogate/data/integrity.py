@@ -16,17 +16,31 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any, Protocol
 
 from surrogate.data.errors import DatasetError
 from surrogate.data.provenance import solver_key
 
-if TYPE_CHECKING:
-    from surrogate.data.store import Store
-
 __all__ = ["REQUIRED_SECTIONS", "manifest_digest", "manifest_problems", "part_problems"]
 
 REQUIRED_SECTIONS = ("space", "space_hash")
+
+
+class Store(Protocol):
+    """What the checks read of a dataset (:class:`surrogate.data.store.Store` is one; the
+    store runs these checks, so this module names what it needs rather than importing it)."""
+
+    manifest: dict[str, Any]
+
+    @property
+    def space(self) -> Any: ...
+
+    def parts(self) -> list[Path]: ...
+
+    def part_metadata(self, part: Path) -> dict[str, Any]: ...
+
+    def read_part(self, part: Path, columns: Any = None) -> Any: ...
 #: A dataset that records solver runs (``runs``, written by generate) has all of these.
 GENERATED_SECTIONS = ("sampling", "solver", "solver_history")
 

@@ -21,15 +21,14 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
+from fem.problem import build_problem
+from fem.scene import SceneError, scene_from_dict
 from surrogate.data.errors import SpaceError
-
-if TYPE_CHECKING:
-    from surrogate.data.parameters import Parameter
-    from surrogate.data.space import Space
+from surrogate.data.parameters import Parameter
 
 __all__ = ["MAX_MESH_PARAMETERS", "MESH_TOPOLOGIES", "MeshPlan"]
 
@@ -39,6 +38,17 @@ MESH_TOPOLOGIES = ("per_sample", "per_design")
 MAX_MESH_PARAMETERS = 12
 
 Cells = tuple[tuple[int, ...], tuple[int, ...]]
+
+
+class Space(Protocol):
+    """What a plan reads of its space (:class:`surrogate.data.space.Space` is one; the space
+    makes its plan, so this module names what it needs rather than importing it)."""
+
+    parameters: tuple[Parameter, ...]
+
+    def resolve(self, row: Mapping[str, Any]) -> dict[str, Any]: ...
+
+    def _scene_error(self, err: Any, row: Mapping[str, Any]) -> SpaceError: ...
 
 
 class MeshPlan:
@@ -63,9 +73,6 @@ class MeshPlan:
 
     def _domain(self, row: Mapping[str, Any]) -> Any:
         """The discretised body of ``row``'s scene without a plan (``fem.domain.Domain``)."""
-        from fem.problem import build_problem
-        from fem.scene import SceneError, scene_from_dict
-
         try:
             return build_problem(scene_from_dict(self.space.resolve(row))).domain
         except SceneError as err:

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from fem.scene import scene_hash, scene_to_dict
 from surrogate.data.errors import SpaceError
 from surrogate.data.space import Space
 
@@ -51,8 +52,6 @@ def plan_samples(space: Space, n: int) -> tuple[list[Planned], PlanStats]:
 
     Raises :class:`SpaceError` naming the sample index and parameter if a scene is invalid,
     or if the space has fewer than ``n`` distinct feasible points in a long prefix."""
-    from fem.scene import scene_hash, scene_to_dict
-
     if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
         raise SpaceError("n", f"n = {n!r}: need an integer >= 1")
     if n > MAX_SAMPLES:

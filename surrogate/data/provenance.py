@@ -25,6 +25,10 @@ from typing import Any
 
 import numpy as np
 
+import fem
+from fem.scene import scene_from_dict
+from fem.simulation import simulate
+
 __all__ = ["FINGERPRINT_DIGITS", "same_solver", "solver_fingerprint", "solver_info",
            "solver_key"]
 
@@ -54,9 +58,6 @@ def _rounded(values: np.ndarray) -> list[str]:
 def solver_fingerprint() -> str:
     """sha256 of the rounded surface amplitudes of :data:`FINGERPRINT_SCENES` (computed once
     per process)."""
-    from fem.scene import scene_from_dict
-    from fem.simulation import simulate
-
     outputs = []
     for scene in FINGERPRINT_SCENES:
         res = simulate(scene_from_dict(scene))
@@ -71,8 +72,6 @@ def solver_info(git: bool = True) -> dict[str, Any]:
     ``fingerprint`` (:func:`solver_fingerprint`), ``hash`` (its first 12 hex digits, stored per
     row) and ``git_revision`` (HEAD of the repository holding fem, "+dirty" with uncommitted
     changes under fem/; "unknown" outside git or with ``git=False``)."""
-    import fem
-
     fingerprint = solver_fingerprint()
     root = Path(fem.__file__).resolve().parent
     return {"version": str(fem.SOLVER_VERSION), "fingerprint": fingerprint,

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.output import read_result
+from fieldspec.documents import read_json_file
 from surrogate.data.errors import DatasetError
 
 __all__ = ["read_simulate_json"]
@@ -16,12 +18,8 @@ __all__ = ["read_simulate_json"]
 def read_simulate_json(path: str | Path) -> tuple[np.ndarray, np.ndarray, float | None]:
     """(distance from the edge [mm], magnitude [um], centre magnitude [um] or None) of the
     profile of a harmonic simulate document. Raises :class:`DatasetError` naming the file."""
-    from fem.output import read_result
-
     path = Path(path)
     try:
-        from fieldspec.documents import read_json_file  # size and nesting limits
-
         doc = read_result(read_json_file(path, DatasetError, "simulate result"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, ValueError) as err:
         raise DatasetError(str(path), f"cannot read simulate result {path}: {err}") from None

@@ -67,7 +67,9 @@ from typing import Any
 
 import numpy as np
 
+from fem.scene import SceneError, effective_scene_dict, scene_from_dict, scene_to_dict
 from fieldspec import REQUIRED, Context, Spec, read_array, read_table, require_table
+from fieldspec.documents import read_toml_file
 from surrogate.data.band import Band, check_band_parameters, read_band
 from surrogate.data.constraints import Constraint, read_constraint
 from surrogate.data.errors import SpaceError
@@ -189,8 +191,6 @@ class Space:
     def scene(self, row: Mapping[str, Any]) -> Any:
         """Validated ``fem.scene.Scene`` for one point. A scene schema error is re-raised as
         :class:`SpaceError` naming the parameter whose path it concerns."""
-        from fem.scene import SceneError, scene_from_dict
-
         resolved = self.resolve(row)
         if self.mesh_topology == "per_design":
             cells_r, cells_z = self.mesh_plan.cells(row)
@@ -319,7 +319,6 @@ def _read_base(d: Mapping[str, Any], head: Mapping[str, Any],
     path = Path(head["base_scene"])
     if not path.is_absolute():
         path = Path(base_dir or ".") / path
-    from fieldspec.documents import read_toml_file
 
     try:
         scene = read_toml_file(path, SpaceError, "base scene")
@@ -346,8 +345,6 @@ def _check_unique(params: Sequence[Parameter]) -> None:
 
 
 def _resolved_defaults(base: Mapping[str, Any]) -> dict[str, Any]:
-    from fem.scene import SceneError, scene_from_dict, scene_to_dict
-
     # The base alone may be incomplete (a parameter supplies the rest): then fill missing
     # tables from the schema's own defaults.
     for scene in (base, {}):
@@ -363,8 +360,6 @@ def check_space(space: Space) -> None:
     the schema rejects), check the constraints admit points, and check that every free
     parameter changes what the solver reads somewhere (a field the solver ignores for that
     scene, e.g. the pins of a glued unit, does not count: ``fem.scene.effective_scene_dict``)."""
-    from fem.scene import effective_scene_dict
-
     def scene_hash(scene: Any) -> str:
         text = json.dumps(effective_scene_dict(scene), sort_keys=True, allow_nan=False)
         return hashlib.sha256(text.encode()).hexdigest()
@@ -403,8 +398,6 @@ def _changes(space: Space, row: Mapping[str, Any], h: str, p: Parameter, alt: np
 
 def load_space(path: str | Path, check_scenes: bool = True) -> Space:
     """Read a space TOML file (see module docstring). Raises :class:`SpaceError`."""
-    from fieldspec.documents import read_toml_file
-
     path = Path(path)
     data = read_toml_file(path, SpaceError, "space file")
     return space_from_dict(data, base_dir=path.parent, check_scenes=check_scenes)

@@ -50,6 +50,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from fieldspec.documents import read_json_file
 from surrogate.data.columns import (
     COMPLEX_FIELDS,
     OUTPUT_FIELDS,
@@ -168,7 +169,6 @@ class Store:
         if not mpath.is_file():
             raise DatasetError(str(path), f"{path} is not a hapticrom dataset "
                                f"(no {MANIFEST_NAME})")
-        from fieldspec.documents import read_json_file
 
         data = read_json_file(mpath, DatasetError, "dataset manifest")
         if not isinstance(data, dict) or data.get("format") != FORMAT:

@@ -24,6 +24,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
+from fem.cost import check_cost
+from fem.problem import build_problem
+from fem.scene import Scene, scene_from_dict
+
 if TYPE_CHECKING:
     from fem.scene import Scene
 
@@ -46,10 +50,6 @@ def topology_key(scene: Scene | Mapping[str, Any]) -> str:
     a few more from a scene dict (parsing). A scene the solver would refuse (invalid, or above
     the size limit) gets a key of its own: it is grouped with nothing, and nothing large is
     allocated here."""
-    from fem.cost import check_cost
-    from fem.problem import build_problem
-    from fem.scene import Scene, scene_from_dict
-
     try:
         parsed = scene if isinstance(scene, Scene) else scene_from_dict(scene)
         check_cost(parsed)

@@ -18,6 +18,9 @@ from typing import Any
 
 import numpy as np
 
+import fem
+from fem.results import magnitude
+from fem.scene import scene_from_dict
 from surrogate.data.columns import complex_columns, sweep_columns
 from surrogate.data.provenance import solver_info
 
@@ -30,8 +33,6 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
 
     Never raises for a bad sample: the exception becomes ``status = "failed"`` with its text.
     The result depends on the scene only."""
-    from fem.scene import scene_from_dict
-
     t0 = time.perf_counter()
     try:
         out = outputs_from_result(_solve(scene_from_dict(scene)))
@@ -47,8 +48,6 @@ def run_sample(scene: Mapping[str, Any]) -> dict[str, Any]:
 def _solve(scene: Any) -> Any:
     """``fem.simulate``: a :class:`fem.simulation.SimulationResult`, or a
     ``fem.sweep.SweepResult`` for a sweep scene (the reduced-order sweep over its band)."""
-    import fem
-
     return fem.simulate(scene)
 
 
@@ -71,8 +70,6 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
     """Dataset output columns (amplitudes in um, distances in mm) of a
     :class:`fem.simulation.SimulationResult` (with the complex amplitudes of a harmonic or
     static result) or of a sweep result (:func:`surrogate.data.columns.sweep_columns`)."""
-    from fem.results import magnitude
-
     if np.ndim(getattr(res, "frequency_hz", 0)) == 1:  # a sweep: one row holds the band
         return sweep_columns(res)
 
@@ -111,8 +108,6 @@ def outputs_from_result(res: Any) -> dict[str, Any]:
 def edge_radius_mm(scene_json: str) -> float | None:
     """The unit's outer radius [mm] of a stored row's scene (the solver's one definition), for
     rows written before datasets stored ``edge_radius_mm``; None for a scene without a unit."""
-    from fem.scene import scene_from_dict
-
     unit = scene_from_dict(json.loads(scene_json)).unit
     return None if unit is None else float(unit.outer_radius_mm)
 

@@ -43,13 +43,14 @@ FORMAT = "hapticrom-model"
 DIGEST_KEY = "card_sha256"
 #: Largest model file read [bytes] (a GP graph of 4,000 training rows is about 20 MB).
 MAX_MODEL_FILE_BYTES = 512 * 1024 * 1024
-#: Card keys every model needs, and the extra keys of each kind.
+#: Card keys every model needs, and the extra keys of each kind with a run-time form of its
+#: own; every other kind (gp, nn, mlp, ...: the registry surrogate.kinds) is a steady-state
+#: predictor, one ONNX graph, and needs :data:`STEADY_KEYS`.
 REQUIRED_KEYS: dict[str, tuple[str, ...]] = {
     "": ("format", "name", "kind", "files", DIGEST_KEY),
-    "gp": ("inputs", "profile_distance_mm", "edge_radius", "graph"),
-    "nn": ("inputs", "profile_distance_mm", "edge_radius", "graph"),
     "rom": ("coefficients",),
 }
+STEADY_KEYS = ("inputs", "profile_distance_mm", "edge_radius", "graph")
 #: Card entries that name a file of the directory: (dotted key, path of keys).
 ROLE_FILES = {"graph.file": ("graph", "file"), "coefficients": ("coefficients",)}
 
@@ -108,10 +109,10 @@ def _parse_card(root: Path) -> dict[str, Any]:
 
 def _check_keys(card: dict[str, Any], card_path: Path) -> None:
     kind = card.get("kind")
-    if kind not in REQUIRED_KEYS or not kind:
-        raise ModelFileError("kind", f"{card_path}: kind {kind!r} is not one of "
-                             f"{', '.join(k for k in REQUIRED_KEYS if k)} (check: keys)")
-    for key in (*REQUIRED_KEYS[""], *REQUIRED_KEYS[kind]):
+    if not isinstance(kind, str) or not kind.isidentifier():
+        raise ModelFileError("kind", f"{card_path}: kind {kind!r} is not a kind name "
+                             "(check: keys)")
+    for key in (*REQUIRED_KEYS[""], *REQUIRED_KEYS.get(kind, STEADY_KEYS)):
         if key not in card:
             raise ModelFileError(key, f"{card_path}: the card has no {key!r} key "
                                  "(check: keys)")

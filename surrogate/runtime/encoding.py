@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from fieldspec import FieldError
+
 __all__ = ["InputSpec", "PredictorInputError", "compile_specs", "encode", "n_features",
            "parse_inputs"]
 
@@ -38,12 +40,8 @@ INPUT_TYPES = ("continuous", "integer", "categorical")
 CATEGORICAL_ENCODINGS = ("onehot", "ordinal")
 
 
-class PredictorInputError(ValueError):
+class PredictorInputError(FieldError):
     """Bad input to a predictor; ``.field`` names the offending input."""
-
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(message)
-        self.field = field
 
 
 @dataclass(frozen=True)

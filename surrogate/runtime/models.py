@@ -13,8 +13,10 @@ this order:
 4. the ``models/`` directory of a source checkout, when this module runs from one.
 
 :func:`load_model` verifies the directory (every listed file's sha256, nothing unlisted) and
-returns a :class:`~surrogate.runtime.predictor.Predictor` for ``nn``/``gp`` cards or an
-:class:`~surrogate.runtime.rom.EnvelopeModel` for ``rom`` cards.
+returns a :class:`~surrogate.runtime.predictor.Predictor` for a card with an ONNX ``graph``
+(every steady-state kind: gp, nn, mlp, ...) or an :class:`~surrogate.runtime.rom.EnvelopeModel`
+for a card with ``coefficients`` (the transient envelope model). The run-time form is told by
+the card's contract, never by the kind's name, so a new steady-state kind loads unchanged.
 """
 
 from __future__ import annotations
@@ -26,13 +28,22 @@ from pathlib import Path
 from typing import Any
 
 from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card
+from surrogate.runtime.predictor import load_predictor
+from surrogate.runtime.rom import load_envelope_model
 
-__all__ = ["ENTRY_POINT_GROUP", "MODEL_PATH_ENV", "find_model", "list_models", "load_model",
-           "model_roots"]
+__all__ = ["ENTRY_POINT_GROUP", "LOADERS", "MODEL_PATH_ENV", "find_model", "is_steady_state",
+           "list_models", "load_model", "model_roots"]
 
 ENTRY_POINT_GROUP = "hapticrom.models"
 MODEL_PATH_ENV = "HAPTICROM_MODEL_PATH"
 _CHECKOUT_MODELS = Path(__file__).resolve().parents[2] / "models"
+#: The card key of each run-time contract -> its loader, tried in this order.
+LOADERS = (("graph", load_predictor), ("coefficients", load_envelope_model))
+
+
+def is_steady_state(card: dict[str, Any]) -> bool:
+    """Whether ``card`` is a steady-state predictor's (one ONNX graph, :class:`Predictor`)."""
+    return "graph" in card
 
 
 def _package_dir(module: str) -> Path | None:
@@ -87,17 +98,13 @@ def list_models() -> dict[str, Path]:
 
 
 def load_model(name_or_path: str | os.PathLike[str]) -> Any:
-    """A verified, loaded model: a ``Predictor`` (card kind ``nn`` or ``gp``) or an
-    ``EnvelopeModel`` (card kind ``rom``). Raises :class:`ModelFileError` for a name that is
-    not found or a directory that fails its checks."""
+    """A verified, loaded model: a ``Predictor`` (a card with an ONNX ``graph``) or an
+    ``EnvelopeModel`` (a card with ``coefficients``). Raises :class:`ModelFileError` for a
+    name that is not found or a directory that fails its checks."""
     path = find_model(name_or_path)
-    kind = read_card(path, verify=False).get("kind")
-    if kind == "rom":
-        from surrogate.runtime.rom import load_envelope_model
-
-        return load_envelope_model(path)
-    if kind in ("nn", "gp"):
-        from surrogate.runtime.predictor import load_predictor
-
-        return load_predictor(path)
-    raise ModelFileError("kind", f"{path}: card kind {kind!r} is not one of 'nn', 'gp', 'rom'")
+    card = read_card(path, verify=False)
+    for key, loader in LOADERS:
+        if key in card:
+            return loader(path)
+    raise ModelFileError("kind", f"{path}: card kind {card.get('kind')!r} has neither a "
+                         f"'graph' nor 'coefficients' (the two run-time contracts)")

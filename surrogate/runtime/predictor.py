@@ -164,11 +164,12 @@ def load_predictor(path: str | Path) -> Predictor:
     failure is a :class:`ModelFileError` naming the file and the check."""
     root = Path(path)
     card = read_card(root)
-    if card.get("kind") not in ("gp", "nn"):
+    if "graph" not in card:  # the steady-state contract, whatever the kind's name
         raise ModelFileError("kind", f"{root / CARD_NAME}: a {card.get('kind')!r} model, not "
-                             "a steady-state predictor (gp or nn)")
+                             "a steady-state predictor (no ONNX graph)")
     graph = card["graph"]
-    if not isinstance(graph, dict) or graph.get("dtype") not in _DTYPES:
+    if not isinstance(graph, dict) or not isinstance(graph.get("dtype"), str) \
+            or graph["dtype"] not in _DTYPES:
         raise ModelFileError("graph", f"{root / CARD_NAME}: graph.dtype must be one of "
                              f"{sorted(_DTYPES)} (check: keys)")
     name = graph["file"]

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import inspect
 import time
 
 import numpy as np
 import pytest
 from hw_cases import real_plan
 
+from fieldspec import FieldError
 from hardware import SafetyLimits, build_schedule, pattern_from_dict, plan_from_dict
+from hardware.backends import DEVICE_KINDS, DEVICES, DeviceRequest, device_kind
 from hardware.log_device import LogDevice
 from hardware.protocol import Segment
 from hardware.sim import SimDevice, envelopes, field_maps, unit_field
@@ -82,3 +85,18 @@ def test_heartbeat_stops_channels_set_directly_past_the_on_time_limit(tmp_path):
 def test_levels_of_the_wrong_size_are_refused(tmp_path):
     with LogDevice(tmp_path / "c.jsonl", 3) as dev, pytest.raises(ValueError, match="3 chan"):
         dev.set_levels(np.ones(2))
+
+
+def test_device_registry_one_signature_and_capabilities_not_names():
+    """Issue 22: every device opens with one signature; play asks a kind what it does."""
+    assert DEVICE_KINDS == ("sim", "log", "serial:PORT")
+    for kind in DEVICES.values():
+        [param] = inspect.signature(kind.open).parameters.values()
+        assert param.annotation in (DeviceRequest, "DeviceRequest")
+    assert [k.name for k in DEVICES.values() if k.live] == ["serial"]
+    assert [k.name for k in DEVICES.values() if k.keeps_refusal] == ["log"]
+    assert device_kind("serial:/dev/x") == (DEVICES["serial"], "/dev/x")
+    for bad in ("serial", "sim:/dev/x", "usb"):
+        with pytest.raises(FieldError, match="choose one of sim, log, serial:PORT") as err:
+            device_kind(bad)
+        assert err.value.field == "--device"

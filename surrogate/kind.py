@@ -1,0 +1,79 @@
+"""What the training pipeline needs to know of one surrogate kind (:class:`SurrogateKind`).
+
+Every kind is one record in :data:`surrogate.kinds.KINDS`; nothing else in the project branches
+on a kind's name. A steady-state kind names a scikit-learn-style estimator class (parameters in
+``__init__``, ``fit(X, T)``, ``predict(X, return_std=True)`` giving the mean and std of the
+targets of :class:`surrogate.pod.ProfileTargets`) and the function that writes it as the one
+ONNX graph contract of :mod:`surrogate.export`. A kind with a pipeline of its own (the
+transient envelope model) names its ``trainer`` instead.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["SurrogateKind"]
+
+
+def _no_extras(estimator: Any) -> dict[str, Any]:
+    return {}
+
+
+def _predict_log(estimator: Any, B: np.ndarray, b: np.ndarray) -> Callable[[np.ndarray],
+                                                                            np.ndarray]:
+    """The in-memory model's log outputs: ``estimator.predict(X) @ B + b``."""
+    return lambda X: estimator.predict(X) @ B + b
+
+
+def steady_report(card: Mapping[str, Any]) -> list[str]:
+    """The lines ``hapticrom train`` prints for a steady-state model's card."""
+    t = card["training"]
+    lines = [f"trained {card['kind']} on {t['rows']} rows, held out {t['held_out']} "
+             f"(POD {t['pod_modes']} modes, {100 * t['pod_energy']:.3f} % energy)"]
+    lines += [f"  {name:22s} " + "  ".join(f"{k} {v:.4g}" for k, v in m.items())
+              for name, m in card["metrics"].items()]
+    lines.append(f"export parity max |d ln| {card['export_parity_max_abs_dln']:.2g}")
+    return lines
+
+
+@dataclass(frozen=True)
+class SurrogateKind:
+    """One kind of surrogate, registered once in :data:`surrogate.kinds.KINDS`.
+
+    Attributes:
+        name: the ``--kind`` value and the card's ``kind``.
+        summary: one line for ``--help`` and docs.
+        estimator: the estimator class (called as ``estimator(random_state=seed, **options)``).
+        export: ``export(estimator, B, b, metadata) -> ONNX bytes`` (input ``x``; outputs
+            ``log_mean``, ``log_std``; see :mod:`surrogate.export`).
+        parity_tol: largest |d ln| allowed between the exported graph and the estimator.
+        dtype: the graph's input dtype, ``"float32"`` or ``"float64"``.
+        std_parity: whether the graph's ``log_std`` is checked against the estimator's std too.
+        pod_modes: default POD modes of the profile (None: 99.99 % of the energy).
+        card_extras: ``card_extras(estimator) -> dict`` merged into the card's ``training``.
+        trainer: for a kind with its own pipeline: ``trainer(paths, out, *, seed, overwrite,
+            options) -> card`` replaces the steady-state pipeline of :mod:`surrogate.train`.
+        report: the lines ``hapticrom train`` prints of the card.
+        engine: what runs the estimator in memory (``"scikit-learn"``, ``"torch"``), for the
+            accuracy study's labels.
+        in_memory: ``in_memory(estimator, B, b) -> f(X) -> log outputs``, the fastest
+            in-memory path (the accuracy study times it beside the ONNX graph).
+    """
+
+    name: str
+    summary: str
+    estimator: Callable[..., Any] | None = None
+    export: Callable[..., bytes] | None = None
+    parity_tol: float = 1e-4
+    dtype: str = "float32"
+    std_parity: bool = False
+    pod_modes: int | None = None
+    card_extras: Callable[[Any], dict[str, Any]] = field(default=_no_extras)
+    trainer: Callable[..., dict[str, Any]] | None = None
+    report: Callable[[Mapping[str, Any]], list[str]] = field(default=steady_report)
+    engine: str = "scikit-learn"
+    in_memory: Callable[..., Callable[[np.ndarray], np.ndarray]] = field(default=_predict_log)

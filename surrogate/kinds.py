@@ -1,0 +1,61 @@
+"""The registry of surrogate kinds: ``--kind`` name -> :class:`surrogate.kind.SurrogateKind`.
+
+This is the one place that lists the kinds. ``hapticrom train``, :func:`surrogate.train.train`,
+the model listing and the accuracy study look a kind up here; a kind's estimator, exporter and
+parity tolerance live in its own module (``surrogate/gp.py``, ``nn.py``, ``mlp.py``). Adding a
+kind is one new module defining ``KIND`` plus its line in :data:`KINDS` (docs/architecture.md).
+
+Importing this module loads scikit-learn, torch and pysindy (about 5 s): the CLI imports it
+only when a command needs a kind, never to build its parser.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from fieldspec import FieldError
+from surrogate import gp, mlp, nn, rom
+from surrogate.kind import SurrogateKind
+
+__all__ = ["KINDS", "STEADY_KINDS", "get"]
+
+#: Options of the envelope model's identification (``--options`` of ``--kind rom``).
+_ROM_OPTIONS = ("harmonic", "max_nfev")
+
+
+def _train_rom(paths: Sequence[str | Path], out: str | Path, *, seed: int, overwrite: bool,
+               options: Mapping[str, Any]) -> dict[str, Any]:
+    unknown = sorted(set(options) - set(_ROM_OPTIONS))
+    if unknown:
+        raise FieldError("--options", f"--options: {unknown[0]!r} is not a rom option "
+                         f"(allowed: {', '.join(_ROM_OPTIONS)})")
+    return rom.train(paths, out, seed=seed, overwrite=overwrite, **options)
+
+
+def _rom_report(card: Mapping[str, Any]) -> list[str]:
+    held = card["metrics"]["held_out"]["summary"]
+    return [f"identified rom on {card['split']['n_train']} runs, held out "
+            f"{card['split']['n_held_out']}",
+            "  " + "  ".join(f"{k} {v:.4g}" for k, v in held.items() if v is not None)]
+
+
+#: The transient envelope model: identified from transient runs by its own pipeline
+#: (:mod:`surrogate.rom`), written as coefficients (not an ONNX graph).
+ROM = SurrogateKind(name="rom", summary="transient envelope model (sparse identification)",
+                    trainer=_train_rom, report=_rom_report)
+
+#: Every kind, by name, in the order ``--help`` lists them.
+KINDS: dict[str, SurrogateKind] = {k.name: k for k in (gp.KIND, nn.KIND, mlp.KIND, ROM)}
+#: The kinds of the steady-state pipeline (one ONNX graph contract, :mod:`surrogate.export`).
+STEADY_KINDS = tuple(name for name, k in KINDS.items() if k.estimator is not None)
+
+
+def get(name: str, field: str = "--kind", *, steady: bool = False) -> SurrogateKind:
+    """The kind called ``name``; a :class:`fieldspec.FieldError` naming ``field`` and the
+    allowed names otherwise (``steady``: only kinds of the steady-state pipeline)."""
+    allowed = STEADY_KINDS if steady else tuple(KINDS)
+    if name not in allowed:
+        raise FieldError(field, f"{field} {name!r}: allowed {', '.join(allowed)}")
+    return KINDS[name]
