@@ -19,8 +19,7 @@ with Z_j the layer's element matrices at the Chebyshev node t_j = 1 / omega_j an
 Lagrange polynomials of the nodes (P is analytic in t on the band but for the pole of
 omega^2 = 1 / t^2 at t = 0, so the convergence stays geometric). :data:`CHEBYSHEV_NODES` nodes
 leave a relative error in P below 1e-6 on a band of ratio 2.5 (1.0e-6 measured at 7 nodes),
-falling about 3x per node
-(tests/fem/test_sweep_operator.py measures the decay).
+falling about 3x per node (tests/fem/test_sweep.py measures the decay).
 
 Element-interior (Q9 centre) dofs are kept in the operator (the condensed operator is a rational
 function of omega, not an affine one); the solver condenses them per element at its frequency,
