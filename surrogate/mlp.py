@@ -29,7 +29,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from surrogate.export import finish_model
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_choice, check_number
+from surrogate.params import check_choice, check_number, training_data
 
 __all__ = ["KIND", "MLPBaselineRegressor", "export_mlp"]
 
@@ -73,11 +73,7 @@ class MLPBaselineRegressor(RegressorMixin, BaseEstimator):
     def fit(self, X: Any, y: Any) -> MLPBaselineRegressor:
         """Fit on features ``X`` (n, d) and targets ``y`` (n, t) or (n,)."""
         self._check_params()
-        X, y = validate_data(self, X, y, dtype=float, multi_output=True, y_numeric=True)
-        if not np.all(np.isfinite(y)):
-            raise ValueError("y contains NaN or infinity")
-        self._y_1d = y.ndim == 1
-        Y = y.reshape(len(y), -1)
+        X, Y, self._y_1d = training_data(self, X, y)
         self.y_mean_ = Y.mean(axis=0)
         scale = Y.std(axis=0)
         self.y_scale_ = np.where(scale > 0, scale, 1.0)

@@ -22,7 +22,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from surrogate.export import export_nn
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_number
+from surrogate.params import check_number, training_data
 
 __all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor"]
 
@@ -95,11 +95,7 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
 
     def fit(self, X: Any, y: Any) -> MLPEnsembleRegressor:
         self._check_params()
-        X, y = validate_data(self, X, y, dtype=float, multi_output=True, y_numeric=True)
-        if not np.all(np.isfinite(y)):
-            raise ValueError("y contains NaN or infinity")
-        self._y_1d = y.ndim == 1
-        Y = y.reshape(len(y), -1)
+        X, Y, self._y_1d = training_data(self, X, y)
         self.x_mean_, self.x_scale_ = _moments(X)
         self.y_mean_, self.y_scale_ = _moments(Y)
         Xs = torch.as_tensor((X - self.x_mean_) / self.x_scale_, dtype=torch.float32)

@@ -12,7 +12,11 @@ import numbers
 from collections.abc import Sequence
 from typing import Any
 
-__all__ = ["check_choice", "check_number"]
+import numpy as np
+from numpy.typing import NDArray
+from sklearn.utils.validation import validate_data
+
+__all__ = ["check_choice", "check_number", "training_data"]
 
 
 def check_number(name: str, value: Any, low: float, high: float = math.inf, *,
@@ -38,3 +42,14 @@ def _range(low: float, high: float, low_open: bool) -> str:
     left = "(" if low_open else "["
     right = "]" if high < math.inf else ")"
     return f"{left}{low:g}, {high:g}{right}"
+
+
+def training_data(estimator: Any, X: Any, y: Any) -> tuple[NDArray, NDArray, bool]:
+    """Features X (n, d) and targets as (n, t), validated by scikit-learn (which records
+    ``n_features_in_`` on ``estimator``) with finite targets required, and whether ``y`` was
+    one-dimensional (so that ``predict`` answers in the same shape)."""
+    X, y = validate_data(estimator, X, y, dtype=float, multi_output=True, y_numeric=True)
+    if not np.all(np.isfinite(y)):
+        raise ValueError("y contains NaN or infinity")
+    return X, y.reshape(len(y), -1), y.ndim == 1
+
