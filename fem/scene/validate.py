@@ -122,19 +122,21 @@ def _read_motor(raw: Any, ctx: Context) -> dict[str, Any]:
 def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
     kind = ctx["load.kind"]
     if kind not in UNIT_LOAD_KINDS:
-        raise SceneError("unit", f'the [unit] table needs load.kind = "unit" or '
-                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove [unit] otherwise')
+        units = [f'"{k}"' for k in UNIT_LOAD_KINDS]
+        raise SceneError("unit", f"the [unit] table needs load.kind = {', '.join(units[:-1])} "
+                         f"or {units[-1]} (load.kind is {str(kind)!r}); remove [unit] otherwise")
     raw = require_table(raw, "unit", UNIT_KEYS, ctx)
     out = read_fields(raw, UNIT, "unit", ctx)
     out["encapsulation"] = _read_rings(raw.get("encapsulation", []), ctx)
     out["motor"] = _read_motor(raw.get("motor", {}), ctx)
     out["board"] = read_solid(raw.get("board", {}), "unit.board", BOARD, ctx)
     out["pogo"] = read_table(raw.get("pogo", {}), POGO, "unit.pogo", ctx)
-    if kind == LoadKind.NORMAL_ACTUATOR:
+    if LoadKind(kind).actuator.unit_part == "actuator":
         out["actuator"] = read_table(raw.get("actuator", {}), ACTUATOR, "unit.actuator", ctx)
     elif "actuator" in raw:
-        raise SceneError("unit.actuator", 'unit.actuator is only used with load.kind = '
-                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove it')
+        users = " or ".join(f'"{k}"' for k in LoadKind if k.actuator.unit_part == "actuator")
+        raise SceneError("unit.actuator", f"unit.actuator is only used with load.kind = "
+                         f"{users} (load.kind is {str(kind)!r}); remove it")
     _check_unit_geometry(build_unit(out), ctx)
     return {key: out[key] for key in UNIT_KEYS if key in out}
 
