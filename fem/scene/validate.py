@@ -122,9 +122,9 @@ def _read_motor(raw: Any, ctx: Context) -> dict[str, Any]:
 def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
     kind = ctx["load.kind"]
     if kind not in UNIT_LOAD_KINDS:
-        units = [f'"{k}"' for k in UNIT_LOAD_KINDS]
-        raise SceneError("unit", f"the [unit] table needs load.kind = {', '.join(units[:-1])} "
-                         f"or {units[-1]} (load.kind is {str(kind)!r}); remove [unit] otherwise")
+        units = " or ".join(f'"{k}"' for k in UNIT_LOAD_KINDS)
+        raise SceneError("unit", f"the [unit] table needs load.kind = {units} (load.kind is "
+                         f"{str(kind)!r}); remove [unit] otherwise")
     raw = require_table(raw, "unit", UNIT_KEYS, ctx)
     out = read_fields(raw, UNIT, "unit", ctx)
     out["encapsulation"] = _read_rings(raw.get("encapsulation", []), ctx)
