@@ -209,11 +209,11 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     _check_band(out["analysis"])
     _check_motor_drive(out, ctx["load.kind"])
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
+        units = " or ".join(f'"{k}"' for k in UNIT_LOAD_KINDS)
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
-                         "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
-                         f"\"normal_actuator\" and a [unit] table (load.kind is "
-                         f"{str(ctx['load.kind'])!r}); use \"static\" or \"harmonic\" for "
-                         "a patch or point load")
+                         f"through analysis.voltage_schedule: it needs load.kind = {units} "
+                         f"and a [unit] table (load.kind is {str(ctx['load.kind'])!r}); use "
+                         "\"static\" or \"harmonic\" for a patch or point load")
     return out
 
 
@@ -264,7 +264,8 @@ def _check_motor_drive(out: Mapping[str, Mapping[str, Any]], load_kind: Any) -> 
     (4.5 V, or the schedule's peak when higher): a rated voltage above it is refused here, at
     load, naming the scene field (the solver's motor model would refuse it at solve)."""
     a = out["analysis"]
-    if a["kind"] != "transient" or str(load_kind) != "unit" or "unit" not in out:
+    spins_up = LoadKind(load_kind).actuator.spins_up  # the ERM (a kind read and checked)
+    if a["kind"] != "transient" or not spins_up or "unit" not in out:
         return
     motor = out["unit"].get("motor") or {}
     rated = motor.get("rated_voltage_V")
