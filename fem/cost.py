@@ -32,7 +32,7 @@ from .problem import (
     resolve_effects,
     shortest_shear_wavelength,
 )
-from .scene import LoadKind, Scene, SceneError
+from .scene import Scene, SceneError
 
 __all__ = ["DEFAULT_MAX_UNKNOWNS", "CostEstimate", "check_cost", "estimate_cost"]
 
@@ -207,8 +207,9 @@ def check_cost(scene: Scene, max_unknowns: float = DEFAULT_MAX_UNKNOWNS) -> Cost
 def _frequency_field(scene: Scene) -> tuple[str, float]:
     """The scene field the absorbers and wavelengths follow (:func:`fem.problem.drive_omega`):
     the motor's rated speed for a transient ERM unit, else the analysis frequency."""
-    if scene.analysis.kind == "transient" and scene.load.kind == LoadKind.UNIT:
-        return "unit.motor.rated_frequency_hz", scene.unit.motor.rated_frequency_hz
+    if scene.analysis.kind == "transient":
+        act = scene.load.kind.actuator
+        return act.transient_frequency_field, act.transient_frequency_hz(scene)
     return "analysis.frequency_hz", scene.analysis.frequency_hz
 
 

@@ -45,7 +45,7 @@ def _frequency_text(res: SimulationResult) -> str | None:
     f = res.meta.get("frequency_hz")
     if f is None:
         return None
-    if res.scene.analysis.kind == "transient" and res.scene.load.kind.value == "unit":
+    if res.scene.analysis.kind == "transient" and res.scene.load.kind.actuator.spins_up:
         return f"ERM spin-up to the rated {f:g} Hz (rev/s), schedule " + ", ".join(
             f"{v:g} V from {t:g} ms" for t, v in res.scene.analysis.voltage_schedule)
     return f"{f:g} Hz"

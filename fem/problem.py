@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from . import haptic_unit, loads
+from . import haptic_unit
 from .absorbers import ELEMENTS_PER_WAVELENGTH
 from .assembly import UR
 from .domain import CellPlanError, Domain, MeshSpec, layered_domain
@@ -64,7 +64,9 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
     """Effect switches: the scene's explicit choices over what it contains. Every effect the
     scene can have is on by default, except the pin preload check (on request only)."""
     u = scene.unit
-    erm = scene.load.kind == LoadKind.UNIT
+    act = scene.load.kind.actuator
+    rocks = [f"'{k}'" for k in LoadKind if k.actuator.parallel_force]
+    spins = [f"'{k}'" for k in LoadKind if k.actuator.spins_up]
     available = {
         "inertia": (scene.analysis.kind != "static",
                     "analysis.kind = 'harmonic', 'sweep' or 'transient'"),
@@ -72,9 +74,9 @@ def resolve_effects(scene: Scene) -> dict[str, bool]:
         "encapsulation": (u is not None and len(u.encapsulation) > 0, "unit.encapsulation rings"),
         "pogo": (u is not None and u.attachment == "pogo", "unit.attachment = 'pogo'"),
         "unit_mass": (u is not None, "a [unit]"),
-        "rocking": (erm, "load.kind = 'unit' (an ERM)"),
-        "spin_up": (erm and scene.analysis.kind == "transient",
-                    "load.kind = 'unit' with analysis.kind = 'transient'"),
+        "rocking": (act.parallel_force, f"load.kind = {' or '.join(rocks)} (an ERM)"),
+        "spin_up": (act.spins_up and scene.analysis.kind == "transient",
+                    f"load.kind = {' or '.join(spins)} with analysis.kind = 'transient'"),
         "preload": (u is not None and u.attachment == "pogo", "unit.attachment = 'pogo'"),
     }
     chosen = {}
@@ -150,8 +152,8 @@ def mesh_spec(scene: Scene) -> MeshSpec:
 def drive_omega(scene: Scene) -> float:
     """Angular frequency (rad/s) the mesh is sized for and the absorbers are tuned for: the
     analysis frequency (a sweep's highest), or for a transient ERM the motor's rated speed."""
-    if scene.analysis.kind == "transient" and scene.load.kind == LoadKind.UNIT:
-        return 2 * np.pi * scene.unit.motor.rated_frequency_hz
+    if scene.analysis.kind == "transient":
+        return 2 * np.pi * scene.load.kind.actuator.transient_frequency_hz(scene)
     return 2 * np.pi * scene.analysis.frequency_hz
 
 
@@ -173,13 +175,12 @@ def build_problem(scene: Scene) -> Problem:
     analysis = analysis if dynamic else "static"
     omega = drive_omega(scene) if dynamic else 0.0
     lay = None
-    r_breaks, blocks, z_breaks = [], (), ()
-    if scene.load.kind.is_unit:
+    act = scene.load.kind.actuator
+    r_breaks, blocks, z_breaks = act.r_breaks(scene), (), ()
+    if act.is_unit:
         lay = haptic_unit.layout(scene.unit, effects["encapsulation"], effects["unit_mass"],
                                  effects["rocking"], hyst)
         r_breaks, blocks, z_breaks = lay.r_breaks, lay.blocks, lay.z_breaks
-    elif scene.load.kind == LoadKind.PRESSURE_PATCH:
-        r_breaks = [scene.load.radius_m]
     try:
         domain = layered_domain(layers, scene.tissue.radius_m, scene.tissue.side,
                                 scene.tissue.base, mesh_spec(scene), analysis, omega, r_breaks,
@@ -194,8 +195,8 @@ def build_problem(scene: Scene) -> Problem:
     if lay is not None and lay.pins is not None:
         extra = (("pogo pins", *haptic_unit.pin_spring(domain, mode, lay.pins)),)
     steady_omega = omega if scene.analysis.kind in ("harmonic", "sweep") else 0.0
-    return Problem(domain, mode, steady_omega, _load(scene, domain, mode, lay), extra,
-                   _edge(scene, lay), effects, scene.unit, lay)
+    return Problem(domain, mode, steady_omega, act.nodal_load(scene, domain, mode, lay), extra,
+                   act.edge(scene, lay), effects, scene.unit, lay)
 
 
 def ring_contact_ties(domain: Domain, r_core: float, r_ring: float, z_top: float,
@@ -222,29 +223,6 @@ def ring_contact_ties(domain: Domain, r_core: float, r_ring: float, z_top: float
         # the mesher puts the ring's and the core's grid lines at the same heights
         raise AssertionError("ring contact: a core face node has no ring node level with it")
     return ring[at], core, UR
-
-
-def _edge(scene: Scene, lay: haptic_unit.UnitLayout | None) -> float | None:
-    if lay is not None:
-        return lay.edge
-    return scene.load.radius_m if scene.load.kind == LoadKind.PRESSURE_PATCH else None
-
-
-def _load(scene: Scene, domain: Domain, mode: int,
-          lay: haptic_unit.UnitLayout | None) -> NDArray:
-    """Full nodal load at the drive amplitude (for a transient ERM: per newton of force)."""
-    ld = scene.load
-    if ld.kind == LoadKind.UNIT:
-        steady = scene.analysis.kind != "transient"
-        force = scene.unit.motor.force_N_at(scene.analysis.frequency_hz) if steady else 1.0
-        return loads.axis_point_force(domain, 1, force, z=lay.rotor_z)
-    if ld.kind == LoadKind.NORMAL_ACTUATOR:
-        return loads.axis_point_force(domain, 0, scene.unit.actuator.force_N, z=lay.center_z)
-    if ld.kind == LoadKind.POINT_FORCE:
-        return loads.axis_point_force(domain, mode, ld.force_N)
-    t = ld.amplitude_Pa
-    return loads.surface_traction(domain, mode, ld.radius_m, (0.0, t, 0.0) if mode == 0
-                                  else (t, 0.0, -t))
 
 
 def resolution_warning(scene: Scene, problem: Problem) -> str | None:

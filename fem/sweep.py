@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from . import SOLVER_VERSION, linalg, probes, results
 from .cost import DEFAULT_MAX_UNKNOWNS, check_cost
 from .problem import Problem, build_problem, resolution_warning
-from .scene import LoadKind, Scene
+from .scene import Scene
 from .solve import OperatorLog, solve_mode
 from .sweep_operator import CHEBYSHEV_NODES, SweepOperator
 from .sweep_output import sweep_document, sweep_summary
@@ -120,9 +120,7 @@ def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES) -> SweepSetup:
     w = 2 * np.pi * freqs
     operator = SweepOperator.build(problem, float(w.min()), float(w.max()), n_nodes)
     points = probes.output_points(scene, problem)
-    scale = np.ones_like(freqs)
-    if scene.load.kind == LoadKind.UNIT:  # the unbalance force m e omega^2
-        scale = (w / problem.omega) ** 2
+    scale = scene.load.kind.actuator.load_scale(w, problem.omega)  # e.g. an ERM's m e omega^2
     return SweepSetup(scene, problem, operator, points, freqs, scale)
 
 
@@ -176,7 +174,7 @@ def direct_sweep(scene: Scene, frequency_hz: NDArray | None = None) -> SweepResu
         w = 2 * np.pi * f
         domain = p.domain if stretch is None else replace(p.domain,
                                                           stretch=replace(stretch, omega=w))
-        scale = (w / p.omega) ** 2 if scene.load.kind == LoadKind.UNIT else 1.0
+        scale = scene.load.kind.actuator.load_scale(np.array([w]), p.omega)[0]
         sol = solve_mode(domain, p.mode, p.load * scale, w, OperatorLog(), extra=p.extra)
         values.append(results.interpolate(s.points.stencil, sol.nodal()))
     s = replace(s, frequency_hz=freqs)

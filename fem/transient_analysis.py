@@ -22,12 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from motorlaw import DEFAULTS as MOTOR_LAW
-
-from . import elements, linalg, motor
+from . import elements, linalg
 from .assembly import assemble_matrix, assemble_vector, build_dofmap
 from .problem import Problem, drive_omega
-from .scene import LoadKind, Scene
+from .scene import Scene
 from .solve import OperatorLog, damping_layer_matrices
 from .transient import solve_transient
 
@@ -82,29 +80,7 @@ def system_matrices(problem: Problem, omega_ref: float, log: OperatorLog):
 
 def load_history(scene: Scene, problem: Problem):
     """Amplitude columns of the load pattern against time, and k."""
-    a = scene.analysis
-    u = scene.unit
-    if scene.load.kind == LoadKind.UNIT:
-        m = u.motor
-        tau_up = m.tau_spinup_s if problem.effects["spin_up"] else 1e-9
-        tau_down = m.tau_spindown_s if problem.effects["spin_up"] else 1e-9
-        erm = motor.ERMMotor(m.rated_voltage_V, m.rated_frequency_hz, m.start_voltage_V,
-                             tau_up, tau_down,
-                             max(MOTOR_LAW["max_voltage_V"],
-                                 float(np.max(np.abs([v for _, v in a.voltage_schedule])))),
-                             unbalance_kg_m=m.unbalance_kg_m)
-        schedule = motor.VoltageSchedule(a.voltage_schedule_s)
-        return motor.erm_load_history(erm, schedule), 2
-    # a normal actuator: force amplitude follows the voltage schedule, relative to rated voltage
-    starts = np.array([t for t, _ in a.voltage_schedule_s])
-    level = np.array([v for _, v in a.voltage_schedule]) / u.motor.rated_voltage_V
-    w = 2 * np.pi * a.frequency_hz
-
-    def history(t: NDArray) -> NDArray:
-        env = level[np.searchsorted(starts, t, side="right") - 1]
-        return (env * np.sin(w * t))[:, None]
-
-    return history, 1
+    return scene.load.kind.actuator.load_history(scene, problem)
 
 
 @linalg.one_blas_thread()

@@ -30,14 +30,16 @@ defaults with their sources), ``validate`` (checks and building), ``io`` (TOML l
 ``scene_from_dict``, ``scene_to_dict``, ``scene_hash``).
 
 The haptic unit. ``load.kind = "unit"`` is a coin ERM motor (an unbalance force rotating
-parallel to the skin, Fourier mode 1) and ``"normal_actuator"`` an LRA or voice coil (a vertical
-force on the housing, mode 0, amplitude ``[unit.actuator] force_N``). Both need a ``[unit]``
-table, and a ``[unit]`` table needs one of them; ``load.direction``, ``radius_mm``,
-``amplitude_Pa`` and ``force_N`` are then not used. ``encapsulation`` lists the silicone rings
-inner to outer, each a library material name (aliases "A".."D" allowed) or an inline table with
-the keys of a tissue layer except ``thickness_mm`` (every ring is ``ring_thickness_mm`` wide).
+parallel to the skin, Fourier mode 1), ``"normal_actuator"`` a voice coil (a vertical force on
+the housing, mode 0, amplitude ``[unit.actuator] force_N``) and ``"lra"`` a coin LRA (the same
+force at its resonance, a resonator's force elsewhere). Each kind is an actuator class of
+``fem.actuators``. The unit kinds need a ``[unit]`` table, and a ``[unit]`` table needs one;
+``load.direction``, ``radius_mm``, ``amplitude_Pa`` and ``force_N`` are then not used.
+``encapsulation`` lists the silicone rings inner to outer, each a library material name
+(aliases "A".."D" allowed) or an inline table with the keys of a tissue layer except
+``thickness_mm`` (every ring is ``ring_thickness_mm`` wide).
 ``[unit.pogo]`` is validated even when ``attachment = "glued"`` leaves it unused.
-``[unit.actuator]`` is only allowed with ``"normal_actuator"``.
+``[unit.actuator]`` is only allowed with the kinds that read it (``"normal_actuator"``, ``"lra"``).
 
 What :func:`scene_to_dict` writes back is described in ``fem.scene.io``.
 

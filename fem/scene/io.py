@@ -22,7 +22,8 @@ from typing import Any
 from fieldspec import Context, Spec, is_bool
 from fieldspec.toml import dumps, read_toml_file
 
-from .model import LoadKind, Scene, SceneError
+from ..actuators import ACTUATORS
+from .model import Scene, SceneError
 from .schedule import Schedule
 from .tables import LAYER, RING, SUBARRAYS, TABLES, UNIT, UNIT_KEYS, UNIT_PARTS
 from .unit_model import Ring, Unit
@@ -97,9 +98,10 @@ def _unit_to_dict(unit: Unit, load_kind: str) -> dict[str, Any]:
            "encapsulation": [_ring_to_toml(ring) for ring in unit.encapsulation]}
     for name, (cls, specs) in UNIT_PARTS.items():
         part = getattr(unit, name)
-        # the actuator only matters for a normal actuator (elsewhere a non-default one is
-        # written so that validation rejects it instead of dropping it)
-        if name != "actuator" or load_kind == LoadKind.NORMAL_ACTUATOR or part != cls():
+        # the actuator table only matters to the kinds that read it (elsewhere a non-default
+        # one is written so that validation rejects it instead of dropping it)
+        reader = ACTUATORS.get(str(load_kind))  # None: an unknown kind, validation reports it
+        if name != "actuator" or (reader and reader.unit_part == name) or part != cls():
             out[name] = _table_to_dict(part, specs)
     return {key: out[key] for key in UNIT_KEYS if key in out}
 

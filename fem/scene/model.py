@@ -16,6 +16,7 @@ from enum import StrEnum
 
 from fieldspec import FieldError
 
+from ..actuators import ACTUATORS, Actuator
 from .si import Elastic, si_view
 from .unit_model import Unit
 
@@ -42,21 +43,26 @@ class SceneError(FieldError):
     __module__ = "fem.scene"  # its public home (error reports print module.name)
 
 
-class LoadKind(StrEnum):
-    """What excites the tissue. The values are the strings of the scene files (``load.kind``)."""
+class _LoadKind(StrEnum):
+    """What excites the tissue. The values are the strings of the scene files (``load.kind``),
+    one per actuator class of ``fem.actuators`` (the members are made from its registry)."""
 
-    PRESSURE_PATCH = "pressure_patch"
-    POINT_FORCE = "point_force"
-    UNIT = "unit"  # a coin ERM motor: unbalance force rotating parallel to the skin
-    NORMAL_ACTUATOR = "normal_actuator"  # an LRA / voice coil: vertical force on the housing
+    @property
+    def actuator(self) -> Actuator:
+        """The actuator class instance that answers the solver's questions about this kind."""
+        return ACTUATORS[self.value]
 
     @property
     def is_unit(self) -> bool:
         """A haptic unit sitting on the skin (needs a ``[unit]`` table)."""
-        return self in UNIT_LOAD_KINDS
+        return self.actuator.is_unit
 
 
-UNIT_LOAD_KINDS = (LoadKind.UNIT, LoadKind.NORMAL_ACTUATOR)
+LoadKind = _LoadKind("LoadKind", [(a.enum_name, a.kind) for a in ACTUATORS.values()],
+                     module=__name__, qualname="LoadKind")
+LoadKind.__doc__ = _LoadKind.__doc__
+
+UNIT_LOAD_KINDS = tuple(kind for kind in LoadKind if kind.is_unit)
 """Load kinds that are a haptic unit sitting on the skin (they need a ``[unit]`` table)."""
 
 EFFECT_NAMES = ("inertia", "hysteretic_damping", "encapsulation", "pogo", "unit_mass", "rocking",
@@ -124,13 +130,10 @@ class Load:
 
     @property
     def fourier_mode(self) -> int:
-        """The Fourier mode the load excites: 1 for an ERM unit (force parallel to the skin),
-        0 for a normal actuator, else 0 / 1 for a normal / tangential direction."""
-        if self.kind == LoadKind.UNIT:
-            return 1
-        if self.kind == LoadKind.NORMAL_ACTUATOR:
-            return 0
-        return 0 if self.direction == "normal" else 1
+        """The Fourier mode the load excites (its actuator's answer): 1 for an ERM unit (force
+        parallel to the skin), 0 for a normal actuator or an LRA, else 0 / 1 for a normal /
+        tangential direction."""
+        return ACTUATORS[str(self.kind)].fourier_mode(self.direction)
 
 
 @dataclass(frozen=True)

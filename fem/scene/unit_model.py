@@ -182,7 +182,7 @@ class Unit:
             interaction at all. Except when bonded, a slit of ``RING_GAP_MM`` separates the
             meshes so that only what the contact passes is tied.
         motor, board, pogo, actuator: the parts (``pogo`` used only with attachment "pogo",
-            ``actuator`` only with ``load.kind = "normal_actuator"``).
+            ``actuator`` only with ``load.kind = "normal_actuator"`` or ``"lra"``).
     """
 
     orientation: str = "forward"

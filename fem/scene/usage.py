@@ -17,10 +17,8 @@ from .model import LoadKind, Scene
 
 __all__ = ["effective_scene_dict", "unused_fields"]
 
-_LOAD_FIELDS = {
-    LoadKind.PRESSURE_PATCH: ("radius_mm", "amplitude_Pa"),
-    LoadKind.POINT_FORCE: ("force_N",),
-}
+_LOAD_FIELDS = {kind: kind.actuator.load_fields for kind in LoadKind
+                if kind.actuator.load_fields}
 _TRANSIENT_FIELDS = ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule")
 
 
@@ -31,7 +29,9 @@ def unused_fields(scene: Scene) -> list[str]:
     used = _LOAD_FIELDS.get(kind, ())
     unused += [f"load.{k}" for keys in _LOAD_FIELDS.values() for k in keys if k not in used]
     a = scene.analysis.kind
-    if a not in ("harmonic", "sweep") and not (a == "transient" and kind != LoadKind.UNIT):
+    transient_field = LoadKind(kind).actuator.transient_frequency_field
+    if a not in ("harmonic", "sweep") and not (
+            a == "transient" and transient_field == "analysis.frequency_hz"):
         unused.append("analysis.frequency_hz")  # a transient ERM runs at its motor's speed
     if a != "transient":
         unused += [f"analysis.{k}" for k in _TRANSIENT_FIELDS] + ["output.history_every"]

@@ -122,19 +122,21 @@ def _read_motor(raw: Any, ctx: Context) -> dict[str, Any]:
 def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
     kind = ctx["load.kind"]
     if kind not in UNIT_LOAD_KINDS:
-        raise SceneError("unit", f'the [unit] table needs load.kind = "unit" or '
-                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove [unit] otherwise')
+        units = " or ".join(f'"{k}"' for k in UNIT_LOAD_KINDS)
+        raise SceneError("unit", f"the [unit] table needs load.kind = {units} (load.kind is "
+                         f"{str(kind)!r}); remove [unit] otherwise")
     raw = require_table(raw, "unit", UNIT_KEYS, ctx)
     out = read_fields(raw, UNIT, "unit", ctx)
     out["encapsulation"] = _read_rings(raw.get("encapsulation", []), ctx)
     out["motor"] = _read_motor(raw.get("motor", {}), ctx)
     out["board"] = read_solid(raw.get("board", {}), "unit.board", BOARD, ctx)
     out["pogo"] = read_table(raw.get("pogo", {}), POGO, "unit.pogo", ctx)
-    if kind == LoadKind.NORMAL_ACTUATOR:
+    if LoadKind(kind).actuator.unit_part == "actuator":
         out["actuator"] = read_table(raw.get("actuator", {}), ACTUATOR, "unit.actuator", ctx)
     elif "actuator" in raw:
-        raise SceneError("unit.actuator", 'unit.actuator is only used with load.kind = '
-                         f'"normal_actuator" (load.kind is {str(kind)!r}); remove it')
+        users = " or ".join(f'"{k}"' for k in LoadKind if k.actuator.unit_part == "actuator")
+        raise SceneError("unit.actuator", f"unit.actuator is only used with load.kind = "
+                         f"{users} (load.kind is {str(kind)!r}); remove it")
     _check_unit_geometry(build_unit(out), ctx)
     return {key: out[key] for key in UNIT_KEYS if key in out}
 
@@ -207,11 +209,11 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     _check_band(out["analysis"])
     _check_motor_drive(out, ctx["load.kind"])
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
+        units = " or ".join(f'"{k}"' for k in UNIT_LOAD_KINDS)
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
-                         "through analysis.voltage_schedule: it needs load.kind = \"unit\" or "
-                         f"\"normal_actuator\" and a [unit] table (load.kind is "
-                         f"{str(ctx['load.kind'])!r}); use \"static\" or \"harmonic\" for "
-                         "a patch or point load")
+                         f"through analysis.voltage_schedule: it needs load.kind = {units} "
+                         f"and a [unit] table (load.kind is {str(ctx['load.kind'])!r}); use "
+                         "\"static\" or \"harmonic\" for a patch or point load")
     return out
 
 
@@ -262,7 +264,8 @@ def _check_motor_drive(out: Mapping[str, Mapping[str, Any]], load_kind: Any) -> 
     (4.5 V, or the schedule's peak when higher): a rated voltage above it is refused here, at
     load, naming the scene field (the solver's motor model would refuse it at solve)."""
     a = out["analysis"]
-    if a["kind"] != "transient" or str(load_kind) != "unit" or "unit" not in out:
+    spins_up = LoadKind(load_kind).actuator.spins_up  # the ERM (a kind read and checked)
+    if a["kind"] != "transient" or not spins_up or "unit" not in out:
         return
     motor = out["unit"].get("motor") or {}
     rated = motor.get("rated_voltage_V")
