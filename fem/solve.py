@@ -120,6 +120,18 @@ def interior_dofs(mode: int, order: int) -> NDArray:
     return centre * ndpn + np.arange(ndpn)
 
 
+def boundary_dofmap(domain: Domain, mode: int, prescribed=()) -> DofMap:
+    """The dof map of the unknowns left after static condensation: the domain's constraints
+    plus the element-interior (Q9 centre) dofs held out; ``element_dofs`` still lists every
+    local dof."""
+    mesh = domain.mesh
+    fixed = domain.fixed()
+    if interior_dofs(mode, mesh.order).size:
+        centres = mesh.elements[:, 1 + (mesh.order + 1)]
+        fixed += [(centres, c) for c in range(elements.dofs_per_node(mode))]
+    return build_dofmap(mesh, mode, fixed, prescribed, domain.ties)
+
+
 def condense(Ze: NDArray, inner: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """Static condensation of element-interior dofs: Z_bb - Z_bc Z_cc^-1 Z_cb.
 
@@ -196,11 +208,7 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
     Ze = dynamic_element_matrices(domain, mode, omega, log, volumetric, stretch)
     t = _lap(stages, "element matrices", t)
     inner = interior_dofs(mode, mesh.order)
-    fixed = domain.fixed()
-    if inner.size:
-        centres = mesh.elements[:, 1 + (mesh.order + 1)]
-        fixed += [(centres, c) for c in range(elements.dofs_per_node(mode))]
-    dm = build_dofmap(mesh, mode, fixed, prescribed, domain.ties)
+    dm = boundary_dofmap(domain, mode, prescribed)
     element_dofs = dm.element_dofs
     t = _lap(stages, "dof map", t)
     if inner.size:

@@ -85,7 +85,7 @@ class SweepSetup:
 
     scene: Scene
     problem: Problem
-    operator: SweepOperator
+    operator: SweepOperator | None
     points: probes.OutputPoints
     frequency_hz: NDArray
     load_scale: NDArray
@@ -113,15 +113,17 @@ class SweepSetup:
         return [slice(n, n + 1), slice(n + 1, n + 2), slice(n + 2, None)]
 
 
-def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES) -> SweepSetup:
-    """Discretise a sweep scene once for its band."""
+def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES, operator: bool = True) -> SweepSetup:
+    """Discretise a sweep scene once for its band (without the reduced model's operator when
+    ``operator`` is False: what a direct solve per frequency needs)."""
     freqs = np.asarray(scene.analysis.frequencies_hz, dtype=float)
     problem = build_problem(scene)
     w = 2 * np.pi * freqs
-    operator = SweepOperator.build(problem, float(w.min()), float(w.max()), n_nodes)
+    op = (SweepOperator.build(problem, float(w.min()), float(w.max()), n_nodes) if operator
+          else None)
     points = probes.output_points(scene, problem)
     scale = scene.load.kind.actuator.load_scale(w, problem.omega)  # e.g. an ERM's m e omega^2
-    return SweepSetup(scene, problem, operator, points, freqs, scale)
+    return SweepSetup(scene, problem, op, points, freqs, scale)
 
 
 @linalg.one_blas_thread()
@@ -133,13 +135,13 @@ def sweep(scene: Scene, *, tolerance: float = SWEEP_TOLERANCE,
     check_cost(scene, max_unknowns)
     s = setup(scene)
     t_setup = time.perf_counter() - t0
-    model, estimate, report = greedy_model(s.operator, s.omegas, s.output_map, s.groups(),
-                                           tolerance, depth, max_expansions)
+    model, outputs, estimate, report = greedy_model(s.operator, s.omegas, s.output_map,
+                                                    s.groups(), tolerance, depth,
+                                                    max_expansions)
     t_model = time.perf_counter() - t0 - t_setup
-    coef = np.array([s.operator.coefficients(w) for w in s.omegas])
-    values = model.evaluate(coef) * s.load_scale[:, None, None]
+    values = outputs * s.load_scale[:, None, None]
     wall = time.perf_counter() - t0
-    meta = _meta(s, wall) | {
+    meta = _meta(s, wall, s.operator.dofmap.n_free) | {
         "expansions_hz": [round(f, 6) for f in report.expansions_hz],
         "estimates": report.estimates, "back_solves": report.back_solves,
         "basis_size": int(model.basis.shape[1]), "chebyshev_nodes": int(
@@ -165,26 +167,28 @@ def direct_sweep(scene: Scene, frequency_hz: NDArray | None = None) -> SweepResu
     """The reference: one direct solve per frequency on the sweep's mesh with the exact PML
     of that frequency (``fem.solve.solve_mode``, as the harmonic analysis solves)."""
     t0 = time.perf_counter()
-    s = setup(scene, n_nodes=1)
+    s = setup(scene, operator=False)
     freqs = s.frequency_hz if frequency_hz is None else np.asarray(frequency_hz, float)
     p = s.problem
     stretch = p.domain.stretch
-    values = []
-    for f in freqs:
+    scales = scene.load.kind.actuator.load_scale(2 * np.pi * freqs, p.omega)
+    values, dofs = [], 0
+    for f, scale in zip(freqs, scales, strict=True):
         w = 2 * np.pi * f
         domain = p.domain if stretch is None else replace(p.domain,
                                                           stretch=replace(stretch, omega=w))
-        scale = scene.load.kind.actuator.load_scale(np.array([w]), p.omega)[0]
         sol = solve_mode(domain, p.mode, p.load * scale, w, OperatorLog(), extra=p.extra)
         values.append(results.interpolate(s.points.stencil, sol.nodal()))
+        dofs = sol.n_dofs
     s = replace(s, frequency_hz=freqs)
-    meta = _meta(s, time.perf_counter() - t0)
+    meta = _meta(s, time.perf_counter() - t0, dofs)
     return _result(s, np.array(values), 0.0, 0.0, freqs.size, meta)
 
 
-def _meta(s: SweepSetup, wall: float) -> dict:
+def _meta(s: SweepSetup, wall: float, dofs: int) -> dict:
+    """The result's meta; ``dofs``: unknowns of the discretisation, element interiors in."""
     included, skipped = s.problem.effect_lists()
-    return {"dofs": int(s.operator.dofmap.n_free),
+    return {"dofs": int(dofs),
             "elements": int(s.problem.domain.mesh.n_elements), "modes": [s.problem.mode],
             "effects": included, "skipped": skipped, "wall_s": wall,
             "time_convention": "exp(+i omega t)", "solver_version": SOLVER_VERSION,

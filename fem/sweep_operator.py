@@ -34,6 +34,7 @@ element interiors free. SI units: N/m, kg, rad/s.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -42,7 +43,7 @@ from numpy.typing import NDArray
 from . import columns, elements, linalg
 from .assembly import DofMap, assemble_blocks, assemble_vector, build_dofmap
 from .problem import Problem
-from .solve import condense, interior_dofs, small_inverse
+from .solve import boundary_dofmap, condense, interior_dofs, small_inverse
 
 #: Chebyshev nodes in 1/omega that interpolate the PML's element matrices over a band.
 CHEBYSHEV_NODES = 8
@@ -69,7 +70,10 @@ def lagrange_weights(nodes: NDArray, x: float) -> tuple[NDArray, NDArray]:
     factors = np.broadcast_to(diff, (n, n)).copy()
     np.fill_diagonal(factors, 1.0)  # row j: the factors (x - x_i), i != j
     values = factors.prod(axis=1) / denom
-    # derivative: sum over i != j of the product without factor i
+    if np.all(diff != 0.0):  # l_j'(x) = l_j(x) sum_{i != j} 1 / (x - x_i)
+        inv = 1.0 / diff
+        return values, values * (inv.sum() - inv)
+    # at a node: sum over i != j of the product without factor i
     slopes = np.empty(n)
     for j in range(n):
         row = np.delete(factors[j], j)
@@ -265,9 +269,50 @@ class SweepOperator:
             Z[self.pml] = np.tensordot(c[2 + len(self.springs):], self.layer.matrices, axes=1)
         return Z
 
+    @cached_property
+    def condensation(self) -> Condensation:
+        """The frequency-independent maps of the condensed solvers (built on first use)."""
+        return Condensation.build(self)
+
     def solver(self, omega: float) -> CondensedSolver:
         """A factorisation of A(omega), interiors condensed."""
         return CondensedSolver.build(self, omega)
+
+
+@dataclass(frozen=True)
+class Condensation:
+    """How the uncondensed free dofs of a :class:`SweepOperator` map onto the unknowns left
+    after static condensation; frequency-independent, built once per operator.
+
+    Attributes:
+        boundary: the condensed dof map (:func:`fem.solve.boundary_dofmap`).
+        inner, outer: local indices of the element-interior and boundary dofs.
+        to_full: (n_b,) free index in the uncondensed map of each boundary free dof.
+        interior: (ne, nc) free index in the uncondensed map of each element's interior dofs.
+        outer_group: the elements' boundary dofs on the condensed map (gather / scatter).
+    """
+
+    boundary: DofMap
+    inner: NDArray
+    outer: NDArray
+    to_full: NDArray
+    interior: NDArray
+    outer_group: ElementGroup
+
+    @classmethod
+    def build(cls, op: SweepOperator) -> Condensation:
+        problem = op.problem
+        mesh, mode, full = problem.domain.mesh, problem.mode, op.dofmap
+        inner = interior_dofs(mode, mesh.order)
+        nd = full.element_dofs.shape[1]
+        outer = np.setdiff1d(np.arange(nd), inner)
+        boundary = boundary_dofmap(problem.domain, mode)
+        masters = np.flatnonzero((boundary.master >= 0) & (boundary.coef == 1.0))
+        to_full = np.empty(boundary.n_free, dtype=int)
+        to_full[boundary.master[masters]] = full.master[masters]
+        interior = full.master[full.element_dofs[:, inner]]
+        outer_group = ElementGroup.build(boundary, full.element_dofs[:, outer], np.empty(0))
+        return cls(boundary, inner, outer, to_full, interior, outer_group)
 
 
 @dataclass(frozen=True)
@@ -277,9 +322,7 @@ class CondensedSolver:
     node belongs to one element)."""
 
     n_free: int
-    to_full: NDArray  # (n_b,) free index in the uncondensed map of each boundary free dof
-    interior: NDArray  # (ne, nc) free index in the uncondensed map of each element's interior
-    outer: ElementGroup  # element boundary dofs on the condensed map (gather / scatter)
+    maps: Condensation
     recover: NDArray  # (ne, nc, nb): u_c = Zcc^-1 f_c + recover u_b
     lift: NDArray  # (ne, nb, nc): Z_bc Zcc^-1, moves interior loads to the boundary
     inverse_cc: NDArray  # (ne, nc, nc)
@@ -287,52 +330,36 @@ class CondensedSolver:
 
     @classmethod
     def build(cls, op: SweepOperator, omega: float) -> CondensedSolver:
-        problem = op.problem
-        mesh, mode = problem.domain.mesh, problem.mode
+        maps = op.condensation
+        inner, outer = maps.inner, maps.outer
         Z = op.element_matrices(omega)
-        inner = interior_dofs(mode, mesh.order)
-        full = op.dofmap
-        fixed = problem.domain.fixed()
         if inner.size:
-            centres = mesh.elements[:, 1 + (mesh.order + 1)]
-            fixed = fixed + [(centres, c) for c in range(elements.dofs_per_node(mode))]
-        boundary = build_dofmap(mesh, mode, fixed, (), problem.domain.ties)
-        edofs = full.element_dofs
-        if inner.size:
-            Zb, outer, recover = condense(Z, inner)
+            Zb, _, recover = condense(Z, inner)
             block = slice(int(inner[0]), int(inner[-1]) + 1)
             inverse_cc = small_inverse(Z[:, block, block])
             lift = np.matmul(Z[:, outer][:, :, inner], inverse_cc)
         else:
-            Zb, outer = Z, np.arange(Z.shape[1])
-            recover = lift = inverse_cc = np.empty((mesh.n_elements, 0, 0))
-        outer_dofs = edofs[:, outer]
-        A = assemble_blocks(boundary, [(outer_dofs, Zb)]
-                            + [(d, K) for _, d, K in problem.extra], "csc")
-        factor = linalg.factorize(A)
-        masters = np.flatnonzero((boundary.master >= 0) & (boundary.coef == 1.0))
-        to_full = np.empty(boundary.n_free, dtype=int)
-        to_full[boundary.master[masters]] = full.master[masters]
-        interior = (full.master[edofs[:, inner]] if inner.size
-                    else np.empty((mesh.n_elements, 0), dtype=int))
-        return cls(full.n_free, to_full, interior,
-                   ElementGroup.build(boundary, outer_dofs, np.empty(0)), recover, lift,
-                   inverse_cc, factor)
+            Zb = Z
+            recover = lift = inverse_cc = np.empty((Z.shape[0], 0, 0))
+        A = assemble_blocks(maps.boundary, [(maps.outer_group.dofs, Zb)]
+                            + [(d, K) for _, d, K in op.problem.extra], "csc")
+        return cls(op.dofmap.n_free, maps, recover, lift, inverse_cc, linalg.factorize(A))
 
     def solve(self, f: NDArray) -> NDArray:
         """x with A x = f; ``f`` and x (n_free,) or (n_free, k) on the uncondensed free dofs."""
+        maps = self.maps
         f = np.asarray(f, dtype=complex)
         F = f[:, None] if f.ndim == 1 else f
         k = F.shape[1]
-        Fb = F[self.to_full]
-        condensed = self.interior.shape[1] > 0
+        Fb = F[maps.to_full]
+        condensed = maps.inner.size > 0
         if condensed:
-            Fc = F[self.interior]  # (ne, nc, k)
-            Fb = Fb - self.outer.gather.T @ np.matmul(self.lift, Fc).reshape(-1, k)
+            Fc = F[maps.interior]  # (ne, nc, k)
+            Fb = Fb - maps.outer_group.gather.T @ np.matmul(self.lift, Fc).reshape(-1, k)
         Ub = self.factor.solve(Fb).reshape(Fb.shape)
         X = np.zeros((self.n_free, k), dtype=complex)
-        X[self.to_full] = Ub
+        X[maps.to_full] = Ub
         if condensed:
-            X[self.interior] = (np.matmul(self.inverse_cc, Fc)
-                                + np.matmul(self.recover, self.outer.local(Ub)))
+            X[maps.interior] = (np.matmul(self.inverse_cc, Fc)
+                                + np.matmul(self.recover, maps.outer_group.local(Ub)))
         return X[:, 0] if f.ndim == 1 else X

@@ -137,7 +137,7 @@ def _orthonormalise(V: NDArray, w: NDArray, drop: float = 1e-8) -> NDArray | Non
 def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArray], NDArray],
                  groups: list[slice], tolerance: float = SWEEP_TOLERANCE,
                  depth: int = KRYLOV_DEPTH, max_expansions: int = MAX_EXPANSIONS
-                 ) -> tuple[ReducedModel, NDArray, GreedyReport]:
+                 ) -> tuple[ReducedModel, NDArray, NDArray, GreedyReport]:
     """Build the reduced model of ``op`` for the angular frequencies ``omegas`` (rad/s).
 
     Args:
@@ -145,7 +145,8 @@ def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArr
         groups: slices of the output points compared as one (centre, edge, profile).
 
     Returns:
-        (model, estimate (n_f,) of the relative output error, report).
+        (model, its outputs (n_f, n_out, 3) at ``omegas`` for the load ``op.load``, estimate
+        (n_f,) of the relative output error, report).
     """
     coef = np.array([op.coefficients(w) for w in omegas])  # (n_f, n_terms)
     report = GreedyReport()
@@ -178,7 +179,7 @@ def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArr
     worst = int(np.argmax(estimate))
     report.residual = _residual(model, op, coef[worst])
     report.residual_hz = float(omegas[worst] / (2 * np.pi))
-    return model, estimate, report
+    return model, full, estimate, report
 
 
 def _expand(op: SweepOperator, omega_e: float, V: NDArray, depth: int,
