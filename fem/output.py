@@ -34,10 +34,9 @@ __all__ = ["KINDS", "SCHEMA_VERSION", "read_result", "result_document"]
 SCHEMA_VERSION = 1
 
 
-class SimulationResult(Protocol):
-    """What a result document is made of (:class:`fem.simulation.SimulationResult` is one;
-    it writes itself with :func:`result_document`, so this module names what it reads rather
-    than importing it). Amplitudes in m, distances in mm."""
+class SurfaceSamples(Protocol):
+    """The sampled surface every solve result carries (one solve, or one per frequency of a
+    sweep along a leading axis). Amplitudes in m, distances in mm."""
 
     scene: Scene
     r_mm: NDArray
@@ -49,6 +48,13 @@ class SimulationResult(Protocol):
     profile_mm: NDArray
     profile: NDArray
     meta: dict
+
+
+class SimulationResult(SurfaceSamples, Protocol):
+    """What a result document is made of (:class:`fem.simulation.SimulationResult` is one;
+    it writes itself with :func:`result_document`, so this module names what it reads rather
+    than importing it)."""
+
     histories: Any
     extras: dict
 

@@ -19,33 +19,29 @@ from numpy.typing import NDArray
 import figstyle
 
 from . import SOLVER_VERSION, results
-from .output import MAGNITUDE, PHASE_REFERENCE, SCHEMA_VERSION, describe_design
-from .scene import Scene, scene_hash, scene_to_dict
+from .output import (
+    MAGNITUDE,
+    PHASE_REFERENCE,
+    SCHEMA_VERSION,
+    SurfaceSamples,
+    describe_design,
+)
+from .scene import scene_hash, scene_to_dict
 
 __all__ = ["KIND", "extrema", "plot_sweep", "sweep_document", "sweep_summary"]
 
 KIND = "hapticrom.simulate.sweep"
 
 
-class SweepResult(Protocol):
+class SweepResult(SurfaceSamples, Protocol):
     """What a sweep document is made of (:class:`fem.sweep.SweepResult` is one; it writes
     itself with :func:`sweep_document`, so this module names what it reads rather than
-    importing it). Amplitudes in m, frequencies in Hz, distances in mm."""
+    importing it). Every sampled value has a leading axis over ``frequency_hz`` (Hz)."""
 
-    scene: Scene
     frequency_hz: NDArray
-    r_mm: NDArray
-    U: NDArray
-    center: NDArray
-    edge: NDArray
-    edge_mm: float | None
-    centre_z_mm: float
-    profile_mm: NDArray
-    profile: NDArray
     error_estimate: float
     tolerance: float
     full_solves: int
-    meta: dict
 
     @property
     def center_amplitude_um(self) -> NDArray | None: ...
