@@ -236,15 +236,16 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: N
 
 
 def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray], *,
-                max_nfev: int = 40) -> tuple[dict[str, NDArray], dict[str, Any]]:
+                max_nfev: int = 40, intercepts: Sequence[int] = (-1,)
+                ) -> tuple[dict[str, NDArray], dict[str, Any]]:
     """Weights (point -> (4, nf + 1)) of ``PARAMS`` over ``features`` (nb, nf + 1, intercept
-    last) and a fit report: grid start, per-run refinement, ridge regression across runs,
-    joint refinement."""
+    last; ``intercepts``: the intercept columns, one per group) and a fit report: grid
+    start, per-run refinement, ridge regression across runs, joint refinement."""
     from scipy.optimize import least_squares
 
     weights, report = {}, {}
     ridge = RIDGE * np.eye(features.shape[1])
-    ridge[-1, -1] = 0.0
+    ridge[list(intercepts), list(intercepts)] = 0.0  # intercepts are not shrunk
     for j, point in enumerate(POINTS):
         t, omega, env, a, keep = _batch(runs, amp, j)
         start = _refine_runs(t, omega, env, a, keep, _grid_start(t, omega, env, a, keep),
@@ -302,16 +303,20 @@ def _feature_columns(harmonic: Any) -> list[int]:
 
 def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
           "models/nn-default", seed: int = 0, overwrite: bool = False,
-          max_nfev: int = 40) -> dict[str, Any]:
+          max_nfev: int = 40, equivalent_loss: bool = True,
+          group_by_attachment: bool = False) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
     bounds the least-squares evaluations of each refinement; ``seed`` is recorded (the fit is
-    deterministic)."""
+    deterministic). ``equivalent_loss``: evaluate the harmonic model with the FE transient's
+    damping, each loss factor eta as eta f / f_rated (see docs/transient-model.md)."""
     out = Path(out)
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, int) or not 1 <= max_nfev <= 1000:
         raise ValueError(f"max_nfev = {max_nfev!r}: allowed integers 1..1000")
+    if not isinstance(equivalent_loss, bool) or not isinstance(group_by_attachment, bool):
+        raise ValueError("equivalent_loss, group_by_attachment: allowed true or false")
     hcard = read_card(harmonic)
     if hcard.get("kind") != "nn" or "frequency_hz" not in [i["name"] for i in hcard["inputs"]]:
         raise ValueError(f"harmonic: {harmonic} is not a harmonic NN model with frequency_hz")
@@ -334,6 +339,13 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
                    "weights": {p: np.zeros((len(PARAMS), len(cols) + 1)).tolist()
                                for p in POINTS},
                    "clip": {k: [-1e6, 1e6] for k in PARAMS}}
+    if group_by_attachment:  # one affine map of the mode per attachment
+        choices = next(s.choices for s in predictor.specs if s.name == "attachment")
+        provisional["group_by"] = {"input": "attachment", "choices": list(choices)}
+        provisional["weights"] = {p: np.zeros((len(PARAMS), (len(cols) + 1) * len(choices)))
+                                  .tolist() for p in POINTS}
+    if equivalent_loss:  # C = eta / omega_rated K in the FE transient (fem.transient_analysis)
+        provisional["loss_reference_hz"] = fixed["rated_frequency_hz"]
     harmonic_dir = Path(harmonic)
     onnx = harmonic_dir / hcard["graph"]["file"]
     shell = model_from_parts(provisional, hcard, onnx)
@@ -342,8 +354,10 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     for r in train_runs:
         for p, a in shell.steady_amplitudes(r.design, extrapolate=True).items():
             amp[p].append(a)
+    n_groups = len(provisional.get("group_by", {"choices": [0]})["choices"])
     weights, report = fit_weights(train_runs, feats, {p: np.stack(v) for p, v in amp.items()},
-                                  max_nfev=max_nfev)
+                                  max_nfev=max_nfev, intercepts=[
+                                      (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)])
     params = np.concatenate([feats @ w.T for w in weights.values()])
     clip = {name: [float(params[:, i].min()), float(params[:, i].max())]
             for i, name in enumerate(PARAMS)}

@@ -8,7 +8,12 @@ the first step at <= 0 V, ``on_time_s``):
   run's own steady level, linearly interpolated);
 - ``decay``: 90-10 % fall time after switch-off, ms (first crossing below 90 % of the steady
   level, last crossing above 10 % before the drive comes back on);
-- ``nrmse``: rms envelope error over the record (ends trimmed by 3 ms) / FE peak.
+- ``nrmse``: rms envelope error over the record (ends trimmed by 3 ms) / FE peak;
+- ``settled``: 1 when the FE envelope has settled before switch-off (over the last 10 ms it
+  stays within +-2.5 % of its mean: peak-to-peak / mean < 5 %), else 0. Many runs have not:
+  the low mode of a pogo unit still beats, or the speed still rises, so their "steady" level
+  is a snapshot of a transient. The steady error is also summarised over settled runs only
+  (``*_steady_rel_err_settled_*``).
 
 Rise and decay errors are absolute (ms). A time that does not exist in the window (the
 envelope never falls below 10 % before the next pulse) is NaN and counted in ``*_undefined``.
@@ -28,6 +33,7 @@ __all__ = ["envelope_metrics", "evaluate", "fall_time", "first_crossing", "summa
 POINTS = ("center", "edge")
 STATES = ("center_envelope_um", "edge_envelope_um")
 STEADY_WINDOW_S = 5e-3
+SETTLED_WINDOW_S, SETTLED_PTP = 10e-3, 0.05
 TRIM_S = 3e-3
 
 
@@ -80,6 +86,8 @@ def envelope_metrics(t: NDArray, volts: NDArray, on_time_s: float, fe: NDArray,
         out[f"rise_ms_{tag}"] = 1e3 * (t90 - t10)
         out[f"decay_ms_{tag}"] = 1e3 * fall_time(t[window], y[window], 0.9 * level,
                                                  0.1 * level)
+    late = fe[(t >= on_time_s - SETTLED_WINDOW_S) & (t < on_time_s)]
+    out["settled"] = float(np.ptp(late) / np.mean(late) < SETTLED_PTP) if late.size else 0.0
     keep = (t >= t[0] + TRIM_S) & (t <= t[-1] - TRIM_S)
     out["nrmse"] = float(np.sqrt(np.mean((model[keep] - fe[keep]) ** 2)) / np.max(fe[keep]))
     return out
@@ -97,14 +105,18 @@ def summarise(rows: Sequence[dict[str, Any]]) -> dict[str, float]:
             "decay_abs_err_ms": [abs(r[f"{p}_decay_ms_model"] - r[f"{p}_decay_ms_fe"])
                                  for r in rows],
             "nrmse": [r[f"{p}_nrmse"] for r in rows],
+            "steady_rel_err_settled": [
+                abs(r[f"{p}_steady_um_model"] / r[f"{p}_steady_um_fe"] - 1)
+                if r.get(f"{p}_settled") else math.nan for r in rows],
         }
         for name, vals in errs.items():
             arr = np.asarray(vals, dtype=float)
             ok = arr[np.isfinite(arr)]
             summary[f"{p}_{name}_median"] = float(np.median(ok)) if ok.size else math.nan
             summary[f"{p}_{name}_max"] = float(np.max(ok)) if ok.size else math.nan
-            if ok.size < arr.size:
+            if ok.size < arr.size and name != "steady_rel_err_settled":
                 summary[f"{p}_{name}_undefined"] = int(arr.size - ok.size)
+        summary[f"{p}_settled_runs"] = int(sum(bool(r.get(f"{p}_settled")) for r in rows))
     return summary
 
 

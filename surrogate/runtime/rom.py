@@ -54,6 +54,7 @@ PARAMS = ("log_sigma", "fn_hz", "log_gain", "gain_slope")
 F_REF_HZ, F_SPAN_HZ = 130.0, 50.0  # the gain slope is per 50 Hz about 130 Hz
 F_LOW_HZ = 100.0  # the harmonic model's lowest trained frequency
 MOTOR_INPUTS = ("tau_spinup_ms", "tau_spindown_ms")
+LOSS_INPUTS = ("tissue_loss_factor", "ring_loss_factor")  # hysteretic loss factors
 
 
 class RomBlowUpError(RuntimeError):
@@ -164,7 +165,8 @@ class EnvelopeModel:
         return out
 
     def features(self, design: Mapping[str, Any], *, extrapolate: bool = False) -> NDArray:
-        """Encoded design features (n_features + 1,) with the intercept last."""
+        """Encoded design features (n_features + 1,) with the intercept last; with
+        ``group_by`` one such block per choice of that input, zero except the design's."""
         X = {k: [design[k]] for k in self.design_names}
         X["frequency_hz"] = [F_LOW_HZ]
         try:
@@ -172,7 +174,12 @@ class EnvelopeModel:
         except PredictorInputError as err:
             raise RomInputError(err.field, str(err)) from None
         keep = np.asarray(self.meta["feature_columns"], dtype=int)
-        return np.append(feats[0, keep].astype(float), 1.0)
+        x = np.append(feats[0, keep].astype(float), 1.0)
+        group = self.meta.get("group_by")
+        if group is None:
+            return x
+        # one affine map per choice of a categorical input (e.g. glued / pogo units)
+        return np.kron([design[group["input"]] == c for c in group["choices"]], x)
 
     def parameters(self, design: Mapping[str, Any], *,
                    extrapolate: bool = False) -> dict[str, dict[str, float]]:
@@ -193,7 +200,11 @@ class EnvelopeModel:
         n = self.grid_hz.size
         X = {k: [design[k]] * n for k in self.design_names}
         X["frequency_hz"] = self.grid_hz
-        out = self.harmonic.predict(X, extrapolate=extrapolate)
+        ref = self.meta.get("loss_reference_hz")
+        if ref is not None:  # the FE transient's damping: loss factor eta f / f_ref at f
+            for name in LOSS_INPUTS:
+                X[name] = float(design[name]) * self.grid_hz / float(ref)
+        out = self.harmonic.predict(X, extrapolate=extrapolate or ref is not None)
         return {p: out[f"{p}_amplitude_um"] for p in POINTS}
 
     def simulate(self, t_s: Any, volts: Any, design: Mapping[str, Any], *,
@@ -276,7 +287,12 @@ def model_from_parts(coefficients: Mapping[str, Any], harmonic_card: dict[str, A
     if coefficients.get("format") != FORMAT:
         raise ValueError(f"format: expected {FORMAT!r}, got {coefficients.get('format')!r}")
     harmonic = Predictor(harmonic_card, make_session(onnx))
-    n = len(coefficients["feature_columns"]) + 1
+    group = coefficients.get("group_by")
+    if group is not None and (not isinstance(group, Mapping) or group.get("input") not in
+                              harmonic.input_names or not group.get("choices")):
+        raise ValueError("group_by: need {input: a categorical design input, choices: [...]}")
+    n = (len(coefficients["feature_columns"]) + 1) * (1 if group is None
+                                                      else len(group["choices"]))
     weights = {}
     for point in POINTS:
         w = np.asarray(coefficients["weights"][point], dtype=float)

@@ -1,0 +1,158 @@
+"""Where the envelope model's steady-level error comes from, per held-out FE transient.
+
+    python bench/rom_steady_levels.py                # 56 held-out runs (about 9 min, loaded)
+    python bench/rom_steady_levels.py --limit 5 --json out.json
+
+For each held-out run of ``datasets/transient`` the FE transient's "steady" level (the mean
+envelope over the 5 ms before the first switch-off, the card's definition,
+``surrogate.rom_metrics``) is compared with four steady responses at the run's mean speed in
+that window (f = omega / 2 pi):
+
+- ``rayleigh``: a harmonic solve of the run's own scene on the transient's own matrices
+  (``fem.transient_analysis.system_matrices``: linear elements, damping layer, each loss factor
+  as stiffness-proportional damping C = eta / omega_ref K at the rated speed), i.e. the steady
+  state the FE transient tends to: its difference from FE is what is not steady in the window
+  (beat of the low mode, lag behind a still-rising speed), not a model error;
+- ``hyst``: the same matrices with hysteretic damping K (1 + i eta) instead (the harmonic
+  solver's damping model): its difference from ``rayleigh`` is the damping model alone;
+- ``nn``: the harmonic NN (``models/nn-default``, quadratic elements, PML, hysteretic) at f
+  (extrapolated below its 100 Hz);
+- ``nn_eq``: the NN with each loss factor replaced by the transient's equivalent at f,
+  eta f / f_ref.
+
+Prints each run's relative differences and the medians; docs/transient-model.md quotes them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+KINDS = ("rayleigh", "hyst", "nn", "nn_eq")
+
+
+def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
+    """Steady (center, edge) envelope magnitudes (um) of a transient scene at ``omega``
+    (rad/s) with the transient's damping (``rayleigh``) and with hysteretic damping
+    (``hyst``), both on the transient's own matrices, and the rated frequency (Hz)."""
+    import scipy.sparse.linalg as spla
+
+    from fem import elements, probes, results
+    from fem.assembly import assemble_matrix, assemble_vector
+    from fem.problem import build_problem, drive_omega
+    from fem.scene.io import scene_from_dict
+    from fem.solve import OperatorLog, damping_layer_matrices
+    from fem.transient_analysis import system_matrices
+
+    scene = scene_from_dict(json.loads(scene_json))
+    problem = build_problem(scene)
+    w_ref = drive_omega(scene)
+    dm, K, M, C = system_matrices(problem, w_ref, OperatorLog())
+    d = problem.domain
+    g = elements.gauss_data(d.mesh)
+    Ke = elements.stiffness(g, problem.mode, d.element_property("mu"),
+                            d.element_property("kappa"))
+    K_eta = assemble_matrix(dm, Ke * d.element_property("loss_factor")[:, None, None])
+    C_layer = assemble_matrix(dm, damping_layer_matrices(d, g, problem.mode,
+                                                         d.element_property("density")))
+    force = assemble_vector(dm, problem.load) * scene.unit.motor.unbalance_kg_m * omega**2
+    pts = probes.output_points(scene, problem)
+    n = pts.r_probe.size
+    out = {}
+    for tag, A in (("rayleigh", K - omega**2 * M + 1j * omega * C),
+                   ("hyst", K + 1j * K_eta - omega**2 * M + 1j * omega * C_layer)):
+        u = spla.spsolve(A.tocsc(), force.astype(complex))
+        vals = results.interpolate(pts.stencil, dm.nodal(dm.expand(u)))
+        out[tag] = np.sqrt(np.sum(np.abs(vals[[n, n + 1]]) ** 2, axis=1)) * 1e6
+    out["f_ref_hz"] = np.array(w_ref / (2 * math.pi))
+    return out
+
+
+def diagnose(limit: int | None = None) -> list[dict[str, Any]]:
+    """Per held-out run: f, attachment, rings, FE level and each kind's relative difference
+    (center, edge)."""
+    from surrogate.data.store import Store
+    from surrogate.rom import HOLDOUT_EVERY, run_from_row
+    from surrogate.rom_metrics import STEADY_WINDOW_S
+    from surrogate.runtime.predictor import load_predictor
+
+    nn = load_predictor(ROOT / "models" / "nn-default")
+    names = [n for n in nn.input_names if n != "frequency_hz"]
+    df = Store.open(ROOT / "datasets" / "transient").read()
+    df = df[(df["status"] == "ok") & df["history_center_um"].notna()]
+    out = []
+    for row in df.to_dict("records"):
+        if int(row["sample_index"]) % HOLDOUT_EVERY != HOLDOUT_EVERY - 1:
+            continue
+        run, _ = run_from_row(row, names)
+        win = (run.t >= run.on_time_s - STEADY_WINDOW_S) & (run.t < run.on_time_s)
+        fe = run.env[:, win].mean(axis=1)
+        omega = float(run.omega[win].mean())
+        f = omega / (2 * math.pi)
+        levels = steady_solves(row["scene_json"], omega)
+        scale = f / float(levels.pop("f_ref_hz"))
+        for tag, s in (("nn", 1.0), ("nn_eq", scale)):
+            X = {k: [run.design[k]] for k in names}
+            X["frequency_hz"] = [f]
+            for k in ("tissue_loss_factor", "ring_loss_factor"):
+                X[k] = [run.design[k] * s]
+            p = nn.predict(X, extrapolate=True)
+            levels[tag] = np.array([p["center_amplitude_um"][0], p["edge_amplitude_um"][0]])
+        rec = {"sample_index": run.sample_index, "f_hz": f, "attachment":
+               run.design["attachment"], "n_rings": int(run.design["n_rings"]),
+               "fe_um": fe.tolist(),
+               **{k: (levels[k] / fe - 1).tolist() for k in KINDS},
+               "hyst_vs_rayleigh": (levels["hyst"] / levels["rayleigh"] - 1).tolist(),
+               "nn_vs_hyst": (levels["nn"] / levels["hyst"] - 1).tolist(),
+               "nn_eq_vs_rayleigh": (levels["nn_eq"] / levels["rayleigh"] - 1).tolist()}
+        out.append(rec)
+        print(f"{run.sample_index:4d} f={f:6.1f} {rec['attachment']:5s} {rec['n_rings']} "
+              + " ".join(f"{k} {rec[k][0]:+.3f}/{rec[k][1]:+.3f}" for k in KINDS), flush=True)
+        if limit and len(out) >= limit:
+            break
+    return out
+
+
+def summary(rows: list[dict[str, Any]]) -> list[str]:
+    """Median |difference| per comparison and point, all runs and split at 100 Hz."""
+    lines = []
+    keys = (*KINDS, "hyst_vs_rayleigh", "nn_vs_hyst", "nn_eq_vs_rayleigh")
+    for label, sel in (("all", rows), ("f < 100 Hz", [r for r in rows if r["f_hz"] < 100]),
+                       ("f >= 100 Hz", [r for r in rows if r["f_hz"] >= 100]),
+                       ("glued", [r for r in rows if r["attachment"] == "glued"]),
+                       ("pogo", [r for r in rows if r["attachment"] == "pogo"])):
+        if not sel:
+            continue
+        parts = []
+        for k in keys:
+            a = np.abs(np.array([r[k] for r in sel]))
+            parts.append(f"{k} {np.median(a[:, 0]):.3f}/{np.median(a[:, 1]):.3f}")
+        lines.append(f"{label} ({len(sel)} runs), median |rel. diff| center/edge: "
+                     + ", ".join(parts))
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--limit", type=int, default=None, help="stop after this many runs")
+    ap.add_argument("--json", help="write the per-run rows to this file")
+    args = ap.parse_args(argv)
+    rows = diagnose(args.limit)
+    for line in summary(rows):
+        print(line)
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
