@@ -302,7 +302,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check-step", action="store_true",
                     help="only check the dataset's 0.25 ms step against 0.1 ms (3 rows)")
     ap.add_argument("--held-out", action="store_true",
-                    help="only print the shipped card's held-out errors per attachment")
+                    help="only print the shipped card's held-out errors (all, per attachment)")
     ap.add_argument("--structures", action="store_true",
                     help="only compare the correction structures, fitted per run (10 rows)")
     ap.add_argument("--part", type=int, default=5,
@@ -317,6 +317,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"median {k} {np.median([r[k] for r in rows]):.4f}")
         return 0
     if args.held_out:
+        card = json.loads((ROOT / "models" / "rom-default" / "card.json").read_text())
+        held, targets = card["metrics"]["held_out"]["summary"], card["targets"]
+        for k, v in held.items():  # every target metric, centre and edge, against its target
+            target = targets.get(k.split("_", 1)[1])
+            print(f"{k} {v:.4g}" + ("" if target is None else f"  (target < {target:g})"))
         for k, v in held_out_by_attachment().items():
             print(k, "  ".join(f"{m} {x:.3g}" for m, x in v.items()))
         return 0
