@@ -194,8 +194,9 @@ def _predict(t: NDArray, omega: NDArray, amp: NDArray, p: NDArray) -> NDArray:
 
 
 def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
-                keep: NDArray) -> NDArray:
-    """Per run (log sigma, f_n, log g, 0) of the best grid point, gain in closed form."""
+                keep: NDArray, n_free: int = 4) -> NDArray:
+    """Per run (log sigma, f_n, log g, 0) of the best grid point, gain in closed form (held
+    at 1 when ``n_free`` = 2: only the mode is free)."""
     nb = env.shape[0]
     best = np.full(nb, np.inf)
     out = np.zeros((nb, len(PARAMS)))
@@ -206,6 +207,7 @@ def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
             yk, ek = y[:, keep], env[:, keep]
             g = np.maximum(np.sum(yk * ek, axis=1) / np.maximum(np.sum(yk * yk, axis=1),
                                                                   1e-30), 1e-6)
+            g = g if n_free > 2 else np.ones(nb)
             err = np.sum((g[:, None] * yk - ek) ** 2, axis=1)
             better = err < best
             best[better] = err[better]
@@ -215,8 +217,9 @@ def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
 
 
 def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: NDArray,
-                 start: NDArray, max_nfev: int) -> NDArray:
-    """Per-run least-squares refinement of the grid start (every 4th sample)."""
+                 start: NDArray, max_nfev: int, n_free: int = 4) -> NDArray:
+    """Per-run least-squares refinement of the grid start (every 4th sample) in its first
+    ``n_free`` parameters (the rest held)."""
     from scipy.optimize import least_squares
 
     sub = keep & (np.arange(t.size) % 4 == 0)
@@ -226,21 +229,24 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: N
     for i in range(env.shape[0]):
         scale = float(np.max(env[i]))
 
-        def residual(p: NDArray, i: int = i, scale: float = scale) -> NDArray:
+        def residual(x: NDArray, i: int = i, scale: float = scale) -> NDArray:
+            p = np.concatenate([x, start[i, n_free:]])
             y = _predict(t, omega[i:i + 1], amp[i:i + 1], p[None, :])[0]
             return ((y - env[i]) / scale)[sub]
 
-        x0 = np.clip(start[i], lo, hi)
-        out[i] = least_squares(residual, x0, bounds=(lo, hi), max_nfev=max_nfev).x
+        x0 = np.clip(start[i], lo, hi)[:n_free]
+        out[i, :n_free] = least_squares(residual, x0, bounds=(lo[:n_free], hi[:n_free]),
+                                        max_nfev=max_nfev).x
     return out
 
 
 def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray], *,
-                max_nfev: int = 40, intercepts: Sequence[int] = (-1,)
+                max_nfev: int = 40, intercepts: Sequence[int] = (-1,), learn_gain: bool = True
                 ) -> tuple[dict[str, NDArray], dict[str, Any]]:
     """Weights (point -> (4, nf + 1)) of ``PARAMS`` over ``features`` (nb, nf + 1, intercept
     last; ``intercepts``: the intercept columns, one per group) and a fit report: grid
-    start, per-run refinement, ridge regression across runs, joint refinement."""
+    start, per-run refinement, ridge regression across runs, joint refinement. Without
+    ``learn_gain`` the gain is 1 and its slope 0: the steady level is the harmonic model's."""
     from scipy.optimize import least_squares
 
     weights, report = {}, {}
@@ -248,26 +254,30 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
     ridge[list(intercepts), list(intercepts)] = 0.0  # intercepts are not shrunk
     for j, point in enumerate(POINTS):
         t, omega, env, a, keep = _batch(runs, amp, j)
-        start = _refine_runs(t, omega, env, a, keep, _grid_start(t, omega, env, a, keep),
-                             max_nfev)
+        n_free = len(PARAMS) if learn_gain else 2
+        start = _refine_runs(t, omega, env, a, keep, _grid_start(t, omega, env, a, keep,
+                                                                 n_free), max_nfev, n_free)
         w0 = np.linalg.solve(features.T @ features + ridge, features.T @ start).T  # (4, nf+1)
+        w0[n_free:] = 0.0
+        held = w0[n_free:].ravel()
         scale = np.max(env, axis=1, keepdims=True)
         sub = keep & (np.arange(t.size) % 4 == 0)
 
         def residual(w: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
-                     sub=sub) -> NDArray:
+                     sub=sub, held=held) -> NDArray:
+            w = np.concatenate([w, held])
             y = _predict(t, omega, a, features @ w.reshape(len(PARAMS), -1).T)
             return ((y - env) / scale)[:, sub].ravel()
 
-        r0 = residual(w0.ravel())
+        r0 = residual(w0[:n_free].ravel())
 
         def residual_runs(p: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
                           sub=sub) -> NDArray:
             return ((_predict(t, omega, a, p) - env) / scale)[:, sub]
 
-        sol = least_squares(residual, w0.ravel(), method="trf", x_scale="jac",
+        sol = least_squares(residual, w0[:n_free].ravel(), method="trf", x_scale="jac",
                             max_nfev=max_nfev, diff_step=1e-4)
-        weights[point] = sol.x.reshape(len(PARAMS), -1)
+        weights[point] = np.concatenate([sol.x, held]).reshape(len(PARAMS), -1)
         per_run = np.sqrt(np.mean(residual_runs(start) ** 2))
         report[point] = {"per_run_optimum_rms": float(per_run),
                          "regression_start_rms": float(np.sqrt(np.mean(r0 ** 2))),
@@ -304,7 +314,7 @@ def _feature_columns(harmonic: Any) -> list[int]:
 def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
           "models/nn-default", seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
-          group_by_attachment: bool = False) -> dict[str, Any]:
+          group_by_attachment: bool = False, learn_gain: bool = True) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
@@ -315,8 +325,9 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, int) or not 1 <= max_nfev <= 1000:
         raise ValueError(f"max_nfev = {max_nfev!r}: allowed integers 1..1000")
-    if not isinstance(equivalent_loss, bool) or not isinstance(group_by_attachment, bool):
-        raise ValueError("equivalent_loss, group_by_attachment: allowed true or false")
+    if not all(isinstance(x, bool) for x in (equivalent_loss, group_by_attachment, learn_gain)):
+        raise ValueError("equivalent_loss, group_by_attachment, learn_gain: allowed true or "
+                         "false")
     hcard = read_card(harmonic)
     if hcard.get("kind") != "nn" or "frequency_hz" not in [i["name"] for i in hcard["inputs"]]:
         raise ValueError(f"harmonic: {harmonic} is not a harmonic NN model with frequency_hz")
@@ -357,7 +368,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     n_groups = len(provisional.get("group_by", {"choices": [0]})["choices"])
     weights, report = fit_weights(train_runs, feats, {p: np.stack(v) for p, v in amp.items()},
                                   max_nfev=max_nfev, intercepts=[
-                                      (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)])
+                                      (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)],
+                                  learn_gain=learn_gain)
     params = np.concatenate([feats @ w.T for w in weights.values()])
     clip = {name: [float(params[:, i].min()), float(params[:, i].max())]
             for i, name in enumerate(PARAMS)}
