@@ -18,7 +18,10 @@ that window (f = omega / 2 pi):
 - ``nn``: the harmonic NN (``models/nn-default``, quadratic elements, PML, hysteretic) at f
   (extrapolated below its 100 Hz);
 - ``nn_eq``: the NN with each loss factor replaced by the transient's equivalent at f,
-  eta f / f_ref.
+  eta f / f_ref;
+- ``model``: the envelope model's own steady level at f (``--model``, default
+  ``models/rom-default``: its learned gain x the harmonic model, continued below 100 Hz);
+  ``model_vs_rayleigh`` is the model's steady error with the window's unsteadiness removed.
 
 Prints each run's relative differences and the medians; docs/transient-model.md quotes them.
 """
@@ -37,7 +40,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-KINDS = ("rayleigh", "hyst", "nn", "nn_eq")
+KINDS = ("rayleigh", "hyst", "nn", "nn_eq", "model")
 
 
 def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
@@ -77,15 +80,34 @@ def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
     return out
 
 
-def diagnose(limit: int | None = None) -> list[dict[str, Any]]:
+def model_steady(model: Any, design: dict[str, Any], omega: float) -> np.ndarray:
+    """The envelope model's steady (center, edge) level (um) at ``omega`` (rad/s)."""
+    from surrogate.runtime.rom import POINTS, continued_steady, gain_factor
+
+    par = model.parameters(design, extrapolate=True)
+    amp = model.steady_amplitudes(design, extrapolate=True)
+    w = np.array([omega])
+    out = []
+    for p in POINTS:
+        q = par[p]
+        sig, fn = np.array([q["sigma_1_s"]]), np.array([q["fn_hz"]])
+        out.append(float((gain_factor(w, np.array([q["gain"]]), np.array([q["gain_slope"]]))
+                          * continued_steady(w, model.grid_hz, amp[p][None, :], sig, fn))[0, 0]))
+    return np.array(out)
+
+
+def diagnose(limit: int | None = None, model_path: str | Path = ROOT / "models" / "rom-default"
+             ) -> list[dict[str, Any]]:
     """Per held-out run: f, attachment, rings, FE level and each kind's relative difference
     (center, edge)."""
     from surrogate.data.store import Store
     from surrogate.rom import HOLDOUT_EVERY, run_from_row
     from surrogate.rom_metrics import STEADY_WINDOW_S
     from surrogate.runtime.predictor import load_predictor
+    from surrogate.runtime.rom import load_envelope_model
 
     nn = load_predictor(ROOT / "models" / "nn-default")
+    model = load_envelope_model(model_path)
     names = [n for n in nn.input_names if n != "frequency_hz"]
     df = Store.open(ROOT / "datasets" / "transient").read()
     df = df[(df["status"] == "ok") & df["history_center_um"].notna()]
@@ -107,13 +129,15 @@ def diagnose(limit: int | None = None) -> list[dict[str, Any]]:
                 X[k] = [run.design[k] * s]
             p = nn.predict(X, extrapolate=True)
             levels[tag] = np.array([p["center_amplitude_um"][0], p["edge_amplitude_um"][0]])
+        levels["model"] = model_steady(model, run.design, omega)
         rec = {"sample_index": run.sample_index, "f_hz": f, "attachment":
                run.design["attachment"], "n_rings": int(run.design["n_rings"]),
                "fe_um": fe.tolist(),
                **{k: (levels[k] / fe - 1).tolist() for k in KINDS},
                "hyst_vs_rayleigh": (levels["hyst"] / levels["rayleigh"] - 1).tolist(),
                "nn_vs_hyst": (levels["nn"] / levels["hyst"] - 1).tolist(),
-               "nn_eq_vs_rayleigh": (levels["nn_eq"] / levels["rayleigh"] - 1).tolist()}
+               "nn_eq_vs_rayleigh": (levels["nn_eq"] / levels["rayleigh"] - 1).tolist(),
+               "model_vs_rayleigh": (levels["model"] / levels["rayleigh"] - 1).tolist()}
         out.append(rec)
         print(f"{run.sample_index:4d} f={f:6.1f} {rec['attachment']:5s} {rec['n_rings']} "
               + " ".join(f"{k} {rec[k][0]:+.3f}/{rec[k][1]:+.3f}" for k in KINDS), flush=True)
@@ -125,7 +149,7 @@ def diagnose(limit: int | None = None) -> list[dict[str, Any]]:
 def summary(rows: list[dict[str, Any]]) -> list[str]:
     """Median |difference| per comparison and point, all runs and split at 100 Hz."""
     lines = []
-    keys = (*KINDS, "hyst_vs_rayleigh", "nn_vs_hyst", "nn_eq_vs_rayleigh")
+    keys = (*KINDS, "hyst_vs_rayleigh", "nn_vs_hyst", "nn_eq_vs_rayleigh", "model_vs_rayleigh")
     for label, sel in (("all", rows), ("f < 100 Hz", [r for r in rows if r["f_hz"] < 100]),
                        ("f >= 100 Hz", [r for r in rows if r["f_hz"] >= 100]),
                        ("glued", [r for r in rows if r["attachment"] == "glued"]),
@@ -145,8 +169,10 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--limit", type=int, default=None, help="stop after this many runs")
     ap.add_argument("--json", help="write the per-run rows to this file")
+    ap.add_argument("--model", default=str(ROOT / "models" / "rom-default"),
+                    help="envelope model directory whose steady level is compared")
     args = ap.parse_args(argv)
-    rows = diagnose(args.limit)
+    rows = diagnose(args.limit, args.model)
     for line in summary(rows):
         print(line)
     if args.json:
