@@ -314,7 +314,7 @@ def _feature_columns(harmonic: Any) -> list[int]:
 def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
           "models/nn-default", seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
-          group_by_attachment: bool = False, learn_gain: bool = True) -> dict[str, Any]:
+          group_by_attachment: bool = True, learn_gain: bool = True) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
