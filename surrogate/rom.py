@@ -6,7 +6,8 @@ meridian, the resolved scene with its voltage schedule and motor, and the design
 the harmonic model). Nothing here imports the solver: it fits from stored rows only.
 
 What is fitted (everything else is known): per point (center, edge) the mode (log sigma, f_n),
-the log gain g and its frequency slope, each affine in the harmonic model's encoded design features:
+the log gain g and its frequency slope, each affine in the harmonic model's encoded design features
+(one map per attachment by default, ``group_by_attachment``):
 
 1. FE envelopes: each displacement component is demodulated with the rotor angle phi (exact,
    :mod:`motorlaw`): z_c = analytic(u_c) e^{-i phi}; the point's envelope is
@@ -35,7 +36,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motorlaw
-from surrogate.registry import check_model_out, package_versions, write_model
+from surrogate import rom_card
+from surrogate.registry import check_model_out, write_model
+from surrogate.rom_card import (
+    COEFFICIENTS_FILE,
+    HARMONIC_CARD_FILE,
+    HARMONIC_GRAPH_FILE,
+    HOLDOUT_EVERY,
+)
 from surrogate.rom_metrics import evaluate
 from surrogate.runtime.card import read_card
 from surrogate.runtime.encoding import n_features
@@ -45,7 +53,6 @@ from surrogate.runtime.rom import (
     MOTOR_INPUTS,
     PARAMS,
     POINTS,
-    EnvelopeModel,
     continued_steady,
     gain_factor,
     mode_response,
@@ -54,12 +61,8 @@ from surrogate.runtime.rom import (
 
 __all__ = ["Run", "complex_envelopes", "fit_weights", "load_runs", "train"]
 
-HOLDOUT_EVERY = 4  # rows with sample_index % 4 == 3 are held out (never used in fitting)
 EDGE_TRIM_S = 3e-3  # the Hilbert transform is least accurate within ~1 period of the ends
 GRID_HZ = np.arange(100.0, 250.0 + 1e-9, 2.5)
-COEFFICIENTS_FILE = "coefficients.json"
-HARMONIC_CARD_FILE = "harmonic_card.json"
-HARMONIC_GRAPH_FILE = "harmonic.onnx"
 SIGMA_GRID = np.geomspace(10.0, 800.0, 9)  # 1/s
 FN_GRID = np.arange(20.0, 201.0, 10.0)  # Hz
 RIDGE = 1e-2
@@ -289,17 +292,6 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
 # --------------------------------------------------------------------------- training + card
 
 
-def _finite(obj: Any) -> Any:
-    """``obj`` with every non-finite float replaced by None (strict JSON for the card)."""
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
 def _feature_columns(harmonic: Any) -> list[int]:
     """Encoded feature columns of the harmonic model's inputs, frequency left out."""
     cols, at = [], 0
@@ -378,49 +370,10 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     model = model_from_parts(coefficients, hcard, onnx)
     metrics = {"train": evaluate(model, train_runs)["summary"],
                "held_out": evaluate(model, held)}
-    card = _card(model, coefficients, data, hashes, harmonic, hcard, len(train_runs),
+    card = rom_card.card(model, coefficients, data, hashes, harmonic, hcard, len(train_runs),
                  len(held), seed, metrics)
     body = json.dumps(coefficients, indent=1, allow_nan=False) + "\n"
     write_model(out, card, {COEFFICIENTS_FILE: body.encode(),
                             HARMONIC_CARD_FILE: (json.dumps(hcard, indent=1) + "\n").encode(),
                             HARMONIC_GRAPH_FILE: onnx.read_bytes()}, overwrite=overwrite)
     return read_card(out)
-
-
-def _card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[Any],
-          hashes: Sequence[str], harmonic: Any, hcard: Mapping[str, Any], n_train: int,
-          n_held: int, seed: int, metrics: dict[str, Any]) -> dict[str, Any]:
-    inputs: dict[str, Any] = {
-        "t_s": {"units": "s", "description": "increasing times, from rest at t_s[0]"},
-        "volts": {"units": "V", "range": [-model.motor.max_voltage_V,
-                                          model.motor.max_voltage_V],
-                  "description": "drive voltage held from each time to the next"}}
-    for name, rng in model.input_ranges.items():
-        inputs[name] = ({"choices": list(rng)} if isinstance(rng[0], str)
-                        else {"range": list(rng)})
-    return {
-        "kind": "rom",
-        "predicts": {"center_envelope_um": "vibration envelope at the unit's center "
-                     "(skin-side face on the axis), um",
-                     "edge_envelope_um": "skin-surface vibration envelope at the unit's "
-                     "outer radius, um"},
-        "interface": "surrogate.runtime.rom.load_envelope_model(path).simulate(t_s, volts, "
-                     "design)",
-        "model": "grey box: motorlaw speed x harmonic steady response at the instantaneous "
-                 "speed x one learned rotating-frame mode per point (surrogate.runtime.rom)",
-        "inputs": inputs,
-        "coefficients": COEFFICIENTS_FILE,
-        "harmonic": {"card": HARMONIC_CARD_FILE, "graph": HARMONIC_GRAPH_FILE,
-                     "source": str(harmonic), "source_files": hcard["files"]},
-        "training_data": [{"path": str(p), "manifest_sha256": h}
-                          for p, h in zip(data, hashes, strict=True)],
-        "split": {"held_out": f"sample_index % {HOLDOUT_EVERY} == {HOLDOUT_EVERY - 1} (never "
-                  "used in fitting)", "n_train": n_train, "n_held_out": n_held},
-        "training": {"seed": seed, "fit": coefficients["fit"]},
-        "targets": {"steady_rel_err_median": 0.02, "steady_rel_err_max": 0.05,
-                    "rise_abs_err_ms_median": 0.5, "rise_abs_err_ms_max": 2.0,
-                    "decay_abs_err_ms_median": 0.5, "decay_abs_err_ms_max": 2.0,
-                    "nrmse_median": 0.03},
-        "metrics": _finite(metrics),
-        "versions": package_versions(),
-    }

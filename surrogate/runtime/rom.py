@@ -23,7 +23,8 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
    with omega and A held at their step averages.
 
 The mode (log sigma, f_n), log g and s are affine in the harmonic model's encoded design features
-(its own encoding, frequency column left out), fitted on FE transients. Designs the FE
+(its own encoding, frequency column left out; with ``group_by`` in the coefficients one map per
+choice of that input, e.g. glued / pogo), fitted on FE transients. Designs the FE
 transient cannot run (a unit on pogo pins with no rings drifts away) are refused.
 """
 
