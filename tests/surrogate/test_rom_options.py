@@ -81,6 +81,7 @@ def test_one_mode_map_per_group_identifies_two_different_modes(model):
 def test_group_by_features_are_one_block_per_choice(model):
     group = {"input": "attachment", "choices": ["glued", "pogo"]}
     grouped = replace(model, meta={**model.meta, "group_by": group})
+    model = replace(model, meta={k: v for k, v in model.meta.items() if k != "group_by"})
     x = model.features(DESIGN)
     assert np.array_equal(grouped.features(DESIGN), np.concatenate([x, np.zeros_like(x)]))
     pogo = {**DESIGN, "attachment": "pogo"}
