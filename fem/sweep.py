@@ -122,7 +122,7 @@ def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES, operator: bool = True) -
     op = (SweepOperator.build(problem, float(w.min()), float(w.max()), n_nodes) if operator
           else None)
     points = probes.output_points(scene, problem)
-    scale = scene.load.kind.actuator.load_scale(w, problem.omega, scene)  # e.g. an ERM's m e omega^2
+    scale = scene.load.kind.actuator.load_scale(w, problem.omega, scene)  # an ERM's m e w^2
     return SweepSetup(scene, problem, op, points, freqs, scale)
 
 

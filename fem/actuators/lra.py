@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from motorlaw.lra import DEFAULTS as LAW, ResonantDrive
+from motorlaw.lra import DEFAULTS as LAW
+from motorlaw.lra import ResonantDrive
 
 from .base import register
 from .normal import NormalActuator

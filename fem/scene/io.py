@@ -25,7 +25,7 @@ from fieldspec import Context, Spec, is_bool
 from fieldspec.toml import dumps, read_toml_file
 
 from ..actuators import ACTUATORS
-from .model import Scene, SceneError
+from .model import SCENE_CHECKS, Scene, SceneError
 from .schedule import Schedule
 from .tables import LAYER, RING, SUBARRAYS, TABLES, UNIT, UNIT_KEYS, UNIT_PARTS
 from .unit_model import Ring, Unit
@@ -145,3 +145,10 @@ def dump_scene_toml(scene: Scene) -> str:
     """Write ``scene`` as TOML text in the schema layout (all values explicit)."""
     return dumps(scene_to_dict(scene), SUBARRAYS,
                  "hapticrom scene (written by fem.scene.dump_scene_toml); units in key names")
+
+
+def _check_scene(scene: Scene) -> None:
+    validate(scene_to_dict(scene))
+
+
+SCENE_CHECKS.append(_check_scene)  # every Scene(...) is validated as its file would be
