@@ -33,6 +33,7 @@ class DriveLaw:
     Attributes:
         kind: the actuator's ``load.kind`` name (the registry key).
         title: what it is, for messages.
+        noun: what a message calls it ("the motor's 4.5 V limit").
         overdrive: a kick above the nominal voltage shortens its rise (and ends when the drive
             state reaches its nominal value).
         brake: a reverse drive (reversed polarity or phase) stops it, ending at rest.
@@ -44,6 +45,7 @@ class DriveLaw:
 
     kind: ClassVar[str]
     title: ClassVar[str]
+    noun: ClassVar[str]
     overdrive: ClassVar[bool] = False
     brake: ClassVar[bool] = False
     carrier: ClassVar[bool] = False
@@ -70,6 +72,11 @@ class DriveLaw:
         ``volts[k]`` (V) held from ``t_s[k]`` to the next time, driven at ``frequency_hz``: the
         quantity an overdrive kick brings to its nominal value and a brake brings to 0 (the
         ERM's speed in rev/s, the LRA's force envelope relative to its rated force)."""
+        raise NotImplementedError
+
+    def force_ratio(self, state: NDArray, frequency_hz: float) -> NDArray:
+        """The force relative to the nominal force at ``frequency_hz`` [-] at the drive state
+        ``state`` (of :meth:`drive_state`)."""
         raise NotImplementedError
 
     @classmethod

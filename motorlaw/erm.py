@@ -94,6 +94,7 @@ class SpeedLaw(DriveLaw):
 
     kind = "unit"
     title = "coin ERM"
+    noun = "motor"
     overdrive = True
     brake = True
     carrier = False
@@ -114,6 +115,11 @@ class SpeedLaw(DriveLaw):
         """The spin speed [rev/s] (the frequency is set by the voltage, not by
         ``frequency_hz``): :func:`held_speed_and_phase`."""
         return held_speed_and_phase(self, t_s, volts)[0] / TWO_PI
+
+    def force_ratio(self, state: NDArray, frequency_hz: float) -> NDArray:
+        """The unbalance force m e omega^2 at the speed ``state`` [rev/s] over its value at
+        ``frequency_hz``."""
+        return (np.asarray(state, dtype=float) / float(frequency_hz)) ** 2
 
     @classmethod
     def of(cls, law: LawLike) -> SpeedLaw:

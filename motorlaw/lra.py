@@ -97,6 +97,7 @@ class ResonantDrive(DriveLaw):
 
     kind = "lra"
     title = "coin LRA"
+    noun = "LRA"
     overdrive = True
     brake = True
     carrier = True
@@ -165,3 +166,7 @@ class ResonantDrive(DriveLaw):
                         tau_spinup_s=self.tau_s, tau_spindown_s=self.tau_s,
                         max_voltage_V=self.max_voltage_V)
         return held_speed_and_phase(unit, t_s, volts)[0]
+
+    def force_ratio(self, state: NDArray, frequency_hz: float) -> NDArray:
+        """The force envelope is the state (relative to the rated force, the nominal)."""
+        return np.asarray(state, dtype=float)

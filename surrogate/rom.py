@@ -111,6 +111,11 @@ def schedule_volts(t: NDArray, schedule_ms: Sequence[Sequence[float]]) -> NDArra
 def run_from_row(row: Mapping[str, Any], design_names: Sequence[str]) -> tuple[Run, dict]:
     """A :class:`Run` and the motor law's fixed parameters of one dataset row."""
     scene = json.loads(row["scene_json"])
+    kind = scene.get("load", {}).get("kind")
+    if kind != motorlaw.SpeedLaw.kind:  # the model's form follows the ERM's speed law
+        raise ValueError(f"--data: sample {row.get('sample_index')} drives load.kind = "
+                         f"{kind!r}; the envelope model is fitted on {motorlaw.SpeedLaw.title} "
+                         f"transients (load.kind = {motorlaw.SpeedLaw.kind!r})")
     m = scene["unit"]["motor"]
     schedule = scene["analysis"]["voltage_schedule"]
     law = motorlaw.SpeedLaw(
@@ -327,7 +332,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     motor_ranges = {k: [min(r.design[k] for r in train_runs),
                         max(r.design[k] for r in train_runs)] for k in MOTOR_INPUTS}
     max_v = max(float(np.max(np.abs(r.volts))) for r in runs)
-    provisional = {"format": FORMAT, "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
+    provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind,
+                   "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
                    "motor": {**fixed, "max_voltage_V": max(max_v,
                                                            motorlaw.DEFAULTS["max_voltage_V"])},
                    "motor_ranges": motor_ranges,
@@ -374,6 +380,7 @@ def _card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[
                         else {"range": list(rng)})
     return {
         "kind": "rom",
+        "actuator": model.actuator,
         "predicts": {"center_envelope_um": "vibration envelope at the unit's center "
                      "(skin-side face on the axis), um",
                      "edge_envelope_um": "skin-surface vibration envelope at the unit's "

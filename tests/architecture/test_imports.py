@@ -48,7 +48,6 @@ LAZY_PLACES = {
     ("hardware/sim.py", "surrogate.runtime.rom"): MOTOR_LAW,
     ("hardware/sim.py", "planner.timing"): MOTOR_LAW,
     ("planner/prepare.py", "surrogate.runtime.rom"): MOTOR_LAW,
-    ("planner/timing.py", "surrogate.runtime.rom"): MOTOR_LAW,
     ("surrogate/rom.py", "surrogate.data.store"): MOTOR_LAW,
 }
 
