@@ -121,3 +121,12 @@ def test_unit_lra_table_only_with_an_lra():
     with pytest.raises(SceneError) as info:
         scene_from_dict(d)
     assert info.value.field == "unit.lra" and '"lra"' in str(info.value)
+
+
+def test_the_solver_and_the_run_time_share_one_drive_law():
+    from motorlaw import ResonantDrive, drive_law
+
+    assert LRA.law() == ResonantDrive() == drive_law(LRA.kind)  # registered by its load.kind
+    assert (LRA.RESONANCE_HZ, LRA.QUALITY_FACTOR) == (LRA.law().resonance_hz,
+                                                      LRA.law().quality_factor)
+    assert drive_law(actuator("unit").kind).kind == "unit"  # the ERM's speed law
