@@ -67,6 +67,10 @@ class DriveLaw:
         top = np.floor(hi * 100) / 100
         return f"at most {top:g} Hz" if lo <= 0 else f"{lo:.2f} to {top:g} Hz"
 
+    def describe(self) -> str:
+        """The law's numbers in words, for a refusal."""
+        raise NotImplementedError
+
     def drive_state(self, t_s: NDArray, volts: NDArray, frequency_hz: float) -> NDArray:
         """The drive state at the times ``t_s`` (s, increasing, from rest at ``t_s[0]``) for
         ``volts[k]`` (V) held from ``t_s[k]`` to the next time, driven at ``frequency_hz``: the

@@ -111,6 +111,11 @@ class SpeedLaw(DriveLaw):
         """(0, the steady speed at ``max_voltage_V``) [Hz]: :func:`max_frequency_hz`."""
         return 0.0, max_frequency_hz(self)
 
+    def describe(self) -> str:
+        per_hz = (self.rated_voltage_V - self.start_voltage_V) / self.rated_frequency_hz
+        return (f"speed law {self.start_voltage_V:g} V + {per_hz * 1e3:.3f} mV/Hz: "
+                f"{self.rated_frequency_hz:g} Hz at {self.rated_voltage_V:g} V")
+
     def drive_state(self, t_s: NDArray, volts: NDArray, frequency_hz: float) -> NDArray:
         """The spin speed [rev/s] (the frequency is set by the voltage, not by
         ``frequency_hz``): :func:`held_speed_and_phase`."""

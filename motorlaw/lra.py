@@ -149,6 +149,10 @@ class ResonantDrive(DriveLaw):
         f = [self.resonance_hz * math.sqrt(x) for x in roots]
         return (f[0], f[1]) if a < 0 else (f[-1], math.inf)
 
+    def describe(self) -> str:
+        return (f"resonance {self.resonance_hz:g} Hz, Q {self.quality_factor:g}: rated force "
+                f"at {self.rated_voltage_V:g} V there")
+
     def drive_state(self, t_s: NDArray, volts: NDArray, frequency_hz: float) -> NDArray:
         """The force envelope relative to the rated force [-] (the module docstring's a(t),
         exact for the voltage amplitude held between samples; reversed phase is a negative

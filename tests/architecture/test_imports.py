@@ -47,7 +47,6 @@ LAZY_PLACES = {
     ("hardware/sim.py", "surrogate.runtime"): MOTOR_LAW,
     ("hardware/sim.py", "surrogate.runtime.rom"): MOTOR_LAW,
     ("hardware/sim.py", "planner.timing"): MOTOR_LAW,
-    ("planner/prepare.py", "surrogate.runtime.rom"): MOTOR_LAW,
     ("surrogate/rom.py", "surrogate.data.store"): MOTOR_LAW,
 }
 

@@ -80,3 +80,16 @@ def test_layout_timing_actuator_is_a_registered_drive_law():
         layout_from_dict({**base, "timing": {"actuator": "voice_coil"}})
     assert isinstance(err.value, FieldError) and err.value.field == "timing.actuator"
     assert "'lra'" in str(err.value) and "'unit'" in str(err.value)
+
+
+def test_planning_an_lra_on_the_erms_harmonic_model_is_refused():
+    from planner import plan_layout
+
+    base = {"model": {"path": str(ROOT / "models" / "nn-default")},
+            "array": {"rows": 2, "cols": 2}, "site": SITE,
+            "drive": {"frequencies_hz": [175.0]}, "design": [{"name": "a", **INPUTS}]}
+    for timing in ({"actuator": "lra", "model": ""}, {"actuator": "lra"}):
+        with pytest.raises(LayoutError) as err:
+            plan_layout(layout_from_dict({**base, "timing": timing}))
+        assert err.value.field == "timing.actuator"
+        assert "predicts the amplitudes of the actuator 'unit' (coin ERM)" in str(err.value)
