@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motorlaw
+from surrogate.data.store import Store
 from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.rom_metrics import evaluate
 from surrogate.runtime.card import read_card
@@ -145,8 +146,6 @@ def load_runs(paths: Sequence[str | Path], design_names: Sequence[str]
               ) -> tuple[list[Run], dict[str, float], list[str]]:
     """Successful transient runs of the datasets, the common fixed motor parameters and the
     sha256 of each manifest. Raises ValueError (naming --data) for a dataset without them."""
-    from surrogate.data.store import Store
-
     runs: list[Run] = []
     fixed: dict[str, float] | None = None
     hashes = []

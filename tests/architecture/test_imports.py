@@ -33,8 +33,6 @@ LAZY_MODULES = {
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
 }
 
-MOTOR_LAW = ("the motor law and the envelope model are being reworked in these files "
-             "(motorlaw/, issue 23): left as that work has them")
 #: (file, imported module) -> reason, for project modules imported inside a function.
 LAZY_PLACES = {
     ("hapticrom/outputs.py", "surrogate.registry"):
@@ -44,10 +42,6 @@ LAZY_PLACES = {
         "evaluate (refine, the studies) need none of it",
     ("surrogate/data/pool.py", "fem.simulation"):
         "worker warm-up: imported in each worker process as it starts, not in the parent",
-    ("hardware/sim.py", "surrogate.runtime"): MOTOR_LAW,
-    ("hardware/sim.py", "surrogate.runtime.rom"): MOTOR_LAW,
-    ("hardware/sim.py", "planner.timing"): MOTOR_LAW,
-    ("surrogate/rom.py", "surrogate.data.store"): MOTOR_LAW,
 }
 
 #: Every command's parser is built at start-up (`hapticrom --help`: 0.4 s); a command's own

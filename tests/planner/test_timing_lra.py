@@ -12,6 +12,7 @@ import pytest
 
 from fieldspec import FieldError
 from motorlaw import ResonantDrive
+from planner import plan_layout
 from planner.layout import LayoutError, layout_from_dict
 from planner.timing import TIMING_KEYS, envelope_timing, law_response, plan_timing
 
@@ -83,8 +84,6 @@ def test_layout_timing_actuator_is_a_registered_drive_law():
 
 
 def test_planning_an_lra_on_the_erms_harmonic_model_is_refused():
-    from planner import plan_layout
-
     base = {"model": {"path": str(ROOT / "models" / "nn-default")},
             "array": {"rows": 2, "cols": 2}, "site": SITE,
             "drive": {"frequencies_hz": [175.0]}, "design": [{"name": "a", **INPUTS}]}

@@ -49,7 +49,6 @@ def test_recorded_actuator_is_read_and_a_carrier_drive_refused(parts):
 
 
 def test_a_model_directory_naming_an_lra_is_a_model_file_error(tmp_path, parts):
-
     coefficients, _, _ = parts
     shutil.copytree(SHIPPED, tmp_path / "m")
     card = json.loads((tmp_path / "m" / "card.json").read_text())
