@@ -57,7 +57,7 @@ class ActuatorRating:
     source: str
 
     def __getattr__(self, name: str) -> float:  # the law's parameters
-        if name == "law":
+        if name == "law" or name.startswith("__"):
             raise AttributeError(name)
         return getattr(self.law, name)
 
