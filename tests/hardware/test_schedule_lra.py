@@ -76,6 +76,8 @@ def test_play_an_lra_plan_on_the_log_device(tmp_path):
     out = tmp_path / "out"
     assert main(["play", str(path), str(pat), "--device", "log", "--out", str(out)]) == 0
     lines = [json.loads(x) for x in (out / "commands.jsonl").read_text().splitlines()]
+    played = next(x for x in lines if x["command"] == "play")
+    assert played["carrier_hz"] == LRA.resonance_hz == played["frequency_hz"]
     limits = next(x for x in lines if x["command"] == "limits")
     assert limits["max_level"]["value"] == pytest.approx(1.5)
     assert limits["max_level"]["owner"].startswith("actuator: 3 V maximum / 2 V nominal at "
