@@ -6,12 +6,12 @@ lower what the one before allows:
 
 1. **the device**: the limits it reports in STATUS (``max_level``, ``max_on_ms``,
    ``watchdog_ms``; docs/protocol.md). ``sim`` and ``log`` report none.
-2. **the actuator**: its rated values (:class:`ActuatorRating`: its drive law, from the plan's
-   ``timing.actuator`` and ``timing.drive_law``, :func:`rating_of`). The level limit is the
-   actuator's maximum voltage over the nominal drive voltage at the plan's frequency (levels
-   are fractions of that nominal voltage; for the ERM at the rated frequency the nominal
-   voltage is the rated voltage, so the limit is max / rated voltage). The nominal voltage is
-   recomputed from the actuator's drive law, never read from the plan. On-time, duty cycle,
+2. **the actuator**: its rated values (:class:`ActuatorRating`: the defaults of the drive law
+   of the plan's ``timing.actuator``, :func:`rating_of`; never parameters read from the plan).
+   The level limit is the actuator's maximum voltage over the nominal drive voltage at the
+   plan's frequency (levels are fractions of that nominal voltage; for the ERM at the rated
+   frequency the nominal voltage is the rated voltage, so the limit is max / rated voltage).
+   The nominal voltage is recomputed from the actuator's drive law. On-time, duty cycle,
    watchdog and the exposure action value have no rated value for an ERM; the project's
    defaults stand in for them (:class:`hardware.safety.SafetyLimits`, stated as such).
 3. **the user**: ``--max-level``, ``--max-on-ms``, ``--max-duty``, ``--watchdog-ms``,
@@ -36,7 +36,7 @@ from fieldspec import Context, Spec, read_table, require_table
 from fieldspec.toml import read_toml_file
 from hardware.safety import LEVEL_TOLERANCE, SafetyError, SafetyLimits, check_schedule
 from hardware.schedule import PlanFile, Schedule
-from motorlaw import DriveLaw, SpeedLaw
+from motorlaw import DriveLaw, SpeedLaw, drive_law
 
 __all__ = ["ERM_RATING", "USER_KEYS", "ActuatorRating", "DeviceLimits", "Resolved",
            "load_user_limits", "preflight", "rating_of", "resolve_limits"]
@@ -81,14 +81,16 @@ class ActuatorRating:
 
 
 def rating_of(plan: PlanFile) -> ActuatorRating:
-    """The rating of the plan's actuator (:attr:`hardware.schedule.PlanFile.drive`): the
-    shipped ERM's when the plan's law is it, else its drive law with the plan as source."""
-    law = plan.drive
-    if law == ERM_RATING.law:
+    """The rating of the plan's actuator kind (``timing.actuator``): its registered drive
+    law's defaults, never the parameters the plan recorded (a plan only asks; a plan computed
+    with other parameters is refused by :func:`preflight`, its nominal voltage being off)."""
+    kind = plan.drive.kind
+    if kind == ERM_RATING.law.kind:
         return ERM_RATING
-    return ActuatorRating(f"{law.title} of the plan", law,
-                          f"the plan's timing.drive_law ({type(law).__module__} "
-                          f"{type(law).__name__}: defaults and their sources there)")
+    law = drive_law(kind)
+    module = type(law).__module__
+    return ActuatorRating(f"{law.title} ({module} defaults)", law,
+                          f"{module}.DEFAULTS (their sources and which are estimates there)")
 
 
 def _erm_rating() -> ActuatorRating:

@@ -81,4 +81,13 @@ def test_play_an_lra_plan_on_the_log_device(tmp_path):
     limits = next(x for x in lines if x["command"] == "limits")
     assert limits["max_level"]["value"] == pytest.approx(1.5)
     assert limits["max_level"]["owner"].startswith("actuator: 3 V maximum / 2 V nominal at "
-                                                   "175 Hz; the plan's timing.drive_law")
+                                                   "175 Hz; motorlaw.lra.DEFAULTS")
+
+
+def test_a_plan_cannot_raise_its_actuators_limit():
+    d = lra_plan()
+    d["timing"]["drive_law"] = {**LRA.params(), "max_voltage_V": 10.0}
+    plan = plan_from_dict(d)
+    assert plan.drive.max_voltage_V == 10.0 and rating_of(plan).law == LRA  # the defaults
+    assert resolve_limits(plan.frequency_hz, actuator=rating_of(plan)).limits.max_level == \
+        pytest.approx(1.5)
