@@ -237,7 +237,9 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
              "actuator": actuator}
     try:
         if not spec.model and model is None:
-            return {**_law_timing(actuator, best, fraction, dt_s), **extra}
+            taus = {"tau_spinup_s": 1e-3 * spec.tau_spinup_ms,
+                    "tau_spindown_s": 1e-3 * spec.tau_spindown_ms}
+            return {**_law_timing(actuator, taus, best, fraction, dt_s), **extra}
         model = model if model is not None else load_envelope_model(spec.model)
         model.check_actuator(actuator)
         inputs = {**request.site, **best.inputs, "tau_spinup_ms": spec.tau_spinup_ms,
@@ -263,11 +265,14 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
     return {**timing.to_dict(), **extra}
 
 
-def _law_timing(kind: str, best: Any, fraction: float, dt_s: float) -> dict[str, Any]:
-    """The timing of the actuator ``kind``'s drive law alone (its defaults), at the plan's
+def _law_timing(kind: str, taus: dict[str, float], best: Any, fraction: float,
+                dt_s: float) -> dict[str, Any]:
+    """The timing of the actuator ``kind``'s drive law alone (its defaults, and the request's
+    time constants ``taus`` where the law has such parameters: the ERM's), at the plan's
     frequency and steady amplitude (:func:`law_response`)."""
     try:
-        law = motorlaw.drive_law(kind)
+        cls = motorlaw.drive_law_class(kind)
+        law = cls.from_params({k: v for k, v in taus.items() if k in cls().params()})
     except ValueError as err:
         raise TimingError("actuator", str(err)) from None
     lo, hi = law.band_hz()

@@ -92,3 +92,13 @@ def test_planning_an_lra_on_the_erms_harmonic_model_is_refused():
             plan_layout(layout_from_dict({**base, "timing": timing}))
         assert err.value.field == "timing.actuator"
         assert "predicts the amplitudes of the actuator 'unit' (coin ERM)" in str(err.value)
+
+
+def test_the_erm_timed_by_its_law_alone_takes_the_requests_time_constants():
+    req = _request("", "unit")
+    req.timing.tau_spinup_ms = 10.0
+    out = plan_timing(req, NS(inputs=INPUTS, frequency_hz=120.0, center_um=5.0))
+    assert out["drive_law"]["tau_spinup_s"] == 0.01 and out["actuator"] == "unit"
+    # quasi-static: the force m e omega^2 rises with the square of the speed (tau 10 ms)
+    square = math.log(1 / (1 - math.sqrt(0.1))) - math.log(1 / (1 - math.sqrt(0.9)))
+    assert out["rise_ms"] == pytest.approx(-10.0 * square, abs=0.6)
