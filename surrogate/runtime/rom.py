@@ -25,6 +25,11 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
 The mode (log sigma, f_n), log g and s are affine in the harmonic model's encoded design features
 (its own encoding, frequency column left out), fitted on FE transients. Designs the FE
 transient cannot run (a unit on pogo pins with no rings drifts away) are refused.
+
+The model knows its actuator: ``coefficients.actuator`` (a ``motorlaw`` drive-law name; absent
+in models trained before it was recorded, such as the shipped one: the coin ERM, ``"unit"``)
+gives its drive law, which must be a speed law (no carrier: this model's form); a caller asks
+:meth:`EnvelopeModel.check_actuator`, which refuses another actuator naming ``actuator``.
 """
 
 from __future__ import annotations
