@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motorlaw
+from surrogate.data.store import Store
 from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.rom_metrics import evaluate
 from surrogate.runtime.card import read_card
@@ -111,6 +112,11 @@ def schedule_volts(t: NDArray, schedule_ms: Sequence[Sequence[float]]) -> NDArra
 def run_from_row(row: Mapping[str, Any], design_names: Sequence[str]) -> tuple[Run, dict]:
     """A :class:`Run` and the motor law's fixed parameters of one dataset row."""
     scene = json.loads(row["scene_json"])
+    kind = scene.get("load", {}).get("kind")
+    if kind != motorlaw.SpeedLaw.kind:  # the model's form follows the ERM's speed law
+        raise ValueError(f"--data: sample {row.get('sample_index')} drives load.kind = "
+                         f"{kind!r}; the envelope model is fitted on {motorlaw.SpeedLaw.title} "
+                         f"transients (load.kind = {motorlaw.SpeedLaw.kind!r})")
     m = scene["unit"]["motor"]
     schedule = scene["analysis"]["voltage_schedule"]
     law = motorlaw.SpeedLaw(
@@ -140,8 +146,6 @@ def load_runs(paths: Sequence[str | Path], design_names: Sequence[str]
               ) -> tuple[list[Run], dict[str, float], list[str]]:
     """Successful transient runs of the datasets, the common fixed motor parameters and the
     sha256 of each manifest. Raises ValueError (naming --data) for a dataset without them."""
-    from surrogate.data.store import Store
-
     runs: list[Run] = []
     fixed: dict[str, float] | None = None
     hashes = []
@@ -327,7 +331,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     motor_ranges = {k: [min(r.design[k] for r in train_runs),
                         max(r.design[k] for r in train_runs)] for k in MOTOR_INPUTS}
     max_v = max(float(np.max(np.abs(r.volts))) for r in runs)
-    provisional = {"format": FORMAT, "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
+    provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind,
+                   "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
                    "motor": {**fixed, "max_voltage_V": max(max_v,
                                                            motorlaw.DEFAULTS["max_voltage_V"])},
                    "motor_ranges": motor_ranges,
@@ -374,6 +379,7 @@ def _card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[
                         else {"range": list(rng)})
     return {
         "kind": "rom",
+        "actuator": model.actuator,
         "predicts": {"center_envelope_um": "vibration envelope at the unit's center "
                      "(skin-side face on the axis), um",
                      "edge_envelope_um": "skin-surface vibration envelope at the unit's "
