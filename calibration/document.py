@@ -31,8 +31,9 @@ LIKELIHOOD = ("ln y ~ N(ln mu(theta), diag((sigma_i/y_i)^2) + k^2 diag(s) C diag
               "bounds exp(+-1.96 s); surrogate_spread 'posterior': s held fixed at its root-mean-"
               "square over the late burn-in walkers, 'local': s at each theta), k the "
               "surrogate's std factor, C the correlation of its "
-              "errors: exp(-|d_i - d_j| / error_length_mm) along the profile times "
-              "exp(-|f_i - f_j| / error_frequency_hz), none between the face and the profile")
+              "errors: exp(-|d_i - d_j| / error_length_mm[output]) along a profile output times "
+              "exp(-|f_i - f_j| / error_frequency_hz), none between points of different "
+              "outputs (the face and the profile, the magnitude and the normal component)")
 
 
 class CalibrationFileError(FieldError):

@@ -160,22 +160,36 @@ class ForwardModel:
                               np.array([i[1] for i in items]), np.array([i[2] for i in items]))
                        for output, items in groups.items()]
 
-    def error_correlation(self, length_mm: float, frequency_scale_hz: float) -> np.ndarray:
+    def error_correlation(self, length_mm: float | Mapping[str, float],
+                          frequency_scale_hz: float) -> np.ndarray:
         """(m, m) correlation of the surrogate's errors between the measured points: along
-        the profile exp(-|d_i - d_j| / length_mm), between frequencies
-        exp(-|f_i - f_j| / frequency_scale_hz), none between the unit's face and the profile
-        (see docs/calibration.md for how these were measured)."""
+        a profile exp(-|d_i - d_j| / length_mm), between frequencies
+        exp(-|f_i - f_j| / frequency_scale_hz), none between points read from different
+        outputs (the unit's face and the profile; the magnitude and the normal component).
+        ``length_mm``: one length, or one per profile output name (see docs/calibration.md
+        for how these were measured)."""
         m = self.y.size
         d = np.zeros(m)
         face = np.zeros(m, dtype=bool)
+        which = np.zeros(m, dtype=int)
+        length = np.ones(m)
         f = np.array([p.frequency_hz for p in self.measurement.points])
-        for g in self.groups:
+        for i, g in enumerate(self.groups):
             d[g.index] = g.weights @ (self.grid_m * 1e3)
             face[g.index] = g.face
-        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length_mm)
-        same = face[:, None] == face[None, :]
+            which[g.index] = i
+            if not g.face:
+                length[g.index] = (length_mm if isinstance(length_mm, int | float)
+                                   else length_mm[g.output])
+        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length[:, None])
+        same = which[:, None] == which[None, :]
         rho = np.where(same, np.where(face[:, None], 1.0, rho_d), 0.0)
         return rho * np.exp(-np.abs(f[:, None] - f[None, :]) / frequency_scale_hz)
+
+    @property
+    def profile_outputs(self) -> tuple[str, ...]:
+        """The profile outputs the measured points read."""
+        return tuple(g.output for g in self.groups if not g.face)
 
     def _rows(self, theta: np.ndarray) -> dict[str, np.ndarray]:
         """Predictor inputs by name: one row per (parameter vector, frequency), frequency
