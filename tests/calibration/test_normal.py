@@ -105,7 +105,7 @@ def test_rows_without_a_normal_output_are_refused_by_name(normal):
 def test_calibrate_picks_nn_normal_for_an_ldv_measurement(tmp_path, capsys):
     out = tmp_path / "cal.json"
     assert main(["calibrate", LDV, "--fit", FIT3, *QUICK, "--out", str(out),
-                 "--plot", str(tmp_path / "cal.png")]) == 0
+                 "--plot", str(tmp_path / "cal.png"), "--verify"]) == 0
     assert "model nn-normal" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     assert problems(doc, schema("calibration")) == []
@@ -115,6 +115,11 @@ def test_calibrate_picks_nn_normal_for_an_ldv_measurement(tmp_path, capsys):
     assert {p["component"] for p in doc["measurement"]["points"]} == {"normal"}
     lo, hi = doc["posterior"]["skin_E_kPa"]["ci95"]  # the example was made with 75 kPa
     assert lo < 75.0 < hi
+    # --verify compares |u_z| of the FE solve at the posterior mean, point by point
+    v = doc["verify"]
+    assert len(v["points"]) == 12 and v["median_abs_log_surrogate_vs_fe"] < 0.15
+    for q in v["points"]:
+        assert abs(q["fe_um"] / q["measured_um"] - 1) < 0.3
 
 
 def test_calibrate_with_a_magnitude_model_exits_2_naming_component_and_model(tmp_path,
