@@ -71,7 +71,7 @@ def _model(args: argparse.Namespace, measurement: Any) -> str:
     from surrogate.runtime.models import find_model
 
     if args.model is not None:
-        return str(args.model)
+        return str(find_model(args.model))  # a directory, or a name of hapticrom models list
     normal = needs_normal(measurement)
     name = MODEL_FOR_NORMAL if normal else MODEL_DEFAULT
     found = find_model(name).resolve()
