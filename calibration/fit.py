@@ -17,10 +17,10 @@ The surrogate's spread s is held fixed while the kept chain is sampled (``spread
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
 burn-in (over the starting walkers when there is no burn-in). Evaluated at every theta
 (``spread = "local"``, as before), the normalising term -1/2 ln det of the covariance moved
-with the ensemble's spread: up to 13 nats along the fat thickness at fixed skin and loss for
-one synthetic subject (the ensemble has 5 members, so its spread is itself a noisy estimate),
-an implicit prior towards wherever the members happen to agree, which made fat-thickness
-posteriors narrow and off (docs/calibration.md, "Proven on synthetic subjects").
+with the ensemble's spread: by 5.2 nats (a factor of about 180) along the fat thickness at
+fixed skin and loss for one synthetic subject (the ensemble has 5 members, so its spread is
+itself a noisy estimate), an implicit prior towards wherever the members happen to agree
+(docs/calibration.md, "The fit" and "Proven on synthetic subjects").
 
 Sampling: ``walkers`` walkers started at the best of ``n_init`` prior draws (one vectorised
 surrogate call), differential-evolution moves (emcee's DEMove 0.8 / DESnookerMove 0.2: robust
