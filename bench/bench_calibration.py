@@ -151,6 +151,33 @@ def residuals(subjects: list[dict], predictor, component: str = "magnitude") -> 
             + f"{np.mean(np.corrcoef(R.T)[0, 1:]):.2f} (mean over the profile)"]
 
 
+def spread_swing(subjects: list[dict], predictor, ids: tuple[int, ...] = (0, 5)) -> list[str]:
+    """How much the surrogate's spread, evaluated at each theta, moves the likelihood's
+    normalising term -1/2 ln det(cov) along the fat thickness (3-20 mm, the true skin and loss)
+    for the study's measurements of subjects ``ids`` at 5 % noise (the first version's
+    implicit prior, docs/calibration.md)."""
+    from calibration.forward import ForwardModel
+
+    k = surrogate_std_factor(predictor.card)
+    lines = []
+    for s in (x for x in subjects if x["id"] in ids):
+        rng = np.random.default_rng(1000 * int(s["id"]) + 5)
+        m = synthetic_measurement(s, rel_noise=0.05, n_points=int(rng.integers(5, 11)), rng=rng)
+        fwd = ForwardModel(predictor, m, FIT, s["design"])
+        corr = fwd.error_correlation({o: ERROR_LENGTH_MM[o] for o in fwd.profile_outputs},
+                                     ERROR_FREQUENCY_HZ)
+        theta = np.array([[s["truth"]["skin_E_kPa"], f, s["truth"]["tissue_loss_factor"]]
+                          for f in np.linspace(3.0, 20.0, 35)])
+        _, sd = fwd.predict(theta)
+        term = [-0.5 * np.linalg.slogdet((k * r)[:, None] * corr * (k * r)[None, :]
+                                         + np.diag(fwd.rel_sigma ** 2))[1] for r in sd]
+        sum_ln = np.log(sd).sum(axis=1)
+        lines.append(f"subject {s['id']} ({len(m.points)} points): along fat 3-20 mm, sum ln s "
+                     f"moves by {np.ptp(sum_ln):.1f}, -1/2 ln det(cov) by {np.ptp(term):.1f} "
+                     "nats")
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subjects", type=int, default=50, help="first N cached subjects")
@@ -171,6 +198,9 @@ def main() -> None:
     ap.add_argument("--json", type=Path, help="write the records")
     ap.add_argument("--residuals", action="store_true",
                     help="only measure the surrogate's error structure on the residual subjects")
+    ap.add_argument("--spread-swing", action="store_true",
+                    help="only print how the spread at each theta moves the likelihood's "
+                    "normalising term along the fat thickness (subjects 0 and 5)")
     ap.add_argument("--table", type=Path, nargs="+", metavar="JSON",
                     help="only print the table of records written by earlier runs (--json)")
     args = ap.parse_args()
@@ -181,6 +211,10 @@ def main() -> None:
     if not sensors or any(s not in MODELS for s in sensors):
         ap.error(f"--sensors {args.sensors!r}: allowed {', '.join(MODELS)}")
     predictors = {s: load_predictor(args.model or MODELS[s]) for s in sensors}
+    if args.spread_swing:
+        print("\n".join(spread_swing(json.loads(CACHE.read_text())["subjects"],
+                                     predictors[sensors[0]])))
+        return
     if args.residuals:
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
