@@ -142,6 +142,9 @@ def residuals(subjects: list[dict], predictor, component: str = "magnitude") -> 
     return [f"surrogate error at the true inputs, {len(R)} FE solves of {len(subjects)} subjects:",
             f"  rms ln(FE/surrogate) {np.sqrt(np.mean(R ** 2)):.3f}; rms in units of its "
             f"log-std {k:.2f} (card-based factor {surrogate_std_factor(predictor.card):.2f})",
+            f"  profile points: within 1.96 log-std {np.mean(np.abs(Z[:, 1:]) <= 1.96):.1%}, "
+            f"median |z| {np.median(np.abs(Z[:, 1:])) / 0.6745:.2f} of a unit Gaussian's, "
+            f"99th percentile |z| {np.percentile(np.abs(Z[:, 1:]), 99):.1f}",
             "  correlation along the profile at lags 1-10 mm: "
             + " ".join(f"{r:.2f}" for r in rho_d) + f" -> length {length:.1f} mm",
             f"  correlation between frequencies of one subject ({len(pairs)} pairs, "
