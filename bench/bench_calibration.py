@@ -29,6 +29,7 @@ import numpy as np
 
 from calibration import calibrate, surrogate_std_factor
 from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, SPREADS
+from calibration.forward import ForwardModel
 from calibration.synthetic import synthetic_measurement
 from surrogate.runtime import load_predictor
 
@@ -159,8 +160,6 @@ def spread_swing(subjects: list[dict], predictor, ids: tuple[int, ...] = (0, 5))
     normalising term -1/2 ln det(cov) along the fat thickness (3-20 mm, the true skin and loss)
     for the study's measurements of subjects ``ids`` at 5 % noise (the first version's
     implicit prior, docs/calibration.md)."""
-    from calibration.forward import ForwardModel
-
     k = surrogate_std_factor(predictor.card)
     lines = []
     for s in (x for x in subjects if x["id"] in ids):
@@ -178,6 +177,47 @@ def spread_swing(subjects: list[dict], predictor, ids: tuple[int, ...] = (0, 5))
         lines.append(f"subject {s['id']} ({len(m.points)} points): along fat 3-20 mm, sum ln s "
                      f"moves by {np.ptp(sum_ln):.1f}, -1/2 ln det(cov) by {np.ptp(term):.1f} "
                      "nats")
+    return lines
+
+
+def misses(records: list[dict], predictors: dict, name: str = "fat_thickness_mm",
+           edge: float = 1.0) -> list[str]:
+    """Why a determined input's interval misses, per sensor kind: the misses (subject, noise,
+    true value), the coverage when determined of truths farther than ``edge`` from the prior's
+    bounds, and the rms over the measured points of the residual at the true inputs in units
+    of its likelihood standard deviation (median over covered and over missed cases)."""
+    subjects = {s["id"]: s for s in json.loads(CACHE.read_text())["subjects"]}
+    lines = []
+    for sensor, predictor in predictors.items():
+        k = surrogate_std_factor(predictor.card)
+        lo, hi = predictor.input_ranges[name]
+        rms: dict[bool, list[float]] = {True: [], False: []}
+        interior, missed = [], []
+        for r in (x for x in records if x.get("sensor", "magnitude") == sensor):
+            sm, truth = r["summary"][name], r["truth"][name]
+            if not sm["identifiable"]:
+                continue
+            inside = sm["ci95"][0] <= truth <= sm["ci95"][1]
+            s = subjects[r["id"]]
+            rng = np.random.default_rng(1000 * int(s["id"]) + round(100 * r["noise"]))
+            m = synthetic_measurement(s, rel_noise=r["noise"], n_points=int(rng.integers(5, 11)),
+                                      rng=rng, component=sensor,
+                                      sensor="ldv" if sensor == "normal" else None)
+            fwd = ForwardModel(predictor, m, FIT, s["design"])
+            mean, sd = fwd.predict(np.array([[s["truth"][n] for n in FIT]]))
+            z = (fwd.y - mean[0]) / np.sqrt((k * sd[0]) ** 2 + fwd.rel_sigma ** 2)
+            rms[inside].append(float(np.sqrt(np.mean(z ** 2))))
+            if min(truth - lo, hi - truth) > edge:
+                interior.append(inside)
+            if not inside:
+                missed.append(f"{s['id']} at {r['noise']:.0%} ({truth:.2f})")
+        lines += [f"{sensor} ({predictor.card.get('name')}), {name} when determined: missed "
+                  f"{', '.join(missed) or 'none'}",
+                  f"  truth farther than {edge:g} from the bounds [{lo:g}, {hi:g}]: covered "
+                  f"{sum(interior)} of {len(interior)}",
+                  "  rms normalised residual at the truth, median: covered "
+                  f"{np.median(rms[True]) if rms[True] else float('nan'):.2f}, missed "
+                  f"{np.median(rms[False]) if rms[False] else float('nan'):.2f}"]
     return lines
 
 
@@ -206,9 +246,16 @@ def main() -> None:
                     "normalising term along the fat thickness (subjects 0 and 5)")
     ap.add_argument("--table", type=Path, nargs="+", metavar="JSON",
                     help="only print the table of records written by earlier runs (--json)")
+    ap.add_argument("--misses", action="store_true",
+                    help="with --table: why the fat thickness's interval misses when determined")
     args = ap.parse_args()
     if args.table:
-        print("\n".join(table([r for p in args.table for r in json.loads(p.read_text())])))
+        records = [r for p in args.table for r in json.loads(p.read_text())]
+        print("\n".join(table(records)))
+        if args.misses:
+            kinds = sorted({r.get("sensor", "magnitude") for r in records})
+            print("\n".join(misses(records, {s: load_predictor(args.model or MODELS[s])
+                                              for s in kinds})))
         return
     sensors = [s.strip() for s in args.sensors.split(",") if s.strip()]
     if not sensors or any(s not in MODELS for s in sensors):
