@@ -7,15 +7,18 @@
 Outputs per row: ``center_amplitude_um``, ``edge_amplitude_um``, ``normalized_edge``,
 ``profile_um`` (n, m) on ``profile_distance_mm`` (distance from the unit's outer edge [mm]),
 ``edge_radius_mm`` (the unit's outer radius [mm]) and ``<output>_log_std`` (predictive std of
-the natural log of each amplitude output). Inputs are validated (:class:`PredictorInputError`
-names the input); out-of-range points raise unless ``extrapolate=True``, which adds a boolean
-``extrapolated`` array instead.
+the natural log of each amplitude output). A model trained on more profiles returns them too,
+by the names of its card's ``log_output_columns`` (``NAME[j]`` columns form the (n, m) output
+``NAME``), e.g. ``profile_normal_um``, the normal component |u_z| of the skin surface.
+Inputs are validated (:class:`PredictorInputError` names the input); out-of-range points raise
+unless ``extrapolate=True``, which adds a boolean ``extrapolated`` array instead.
 
 This module must stay importable without torch, scikit-learn, pysindy or the FE solver.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +39,35 @@ __all__ = ["ModelFileError", "Predictor", "PredictorInputError", "load_predictor
            "make_session"]
 
 SCALAR_OUTPUTS = ("center_amplitude_um", "edge_amplitude_um", "normalized_edge")
+_ARRAY_COLUMN = re.compile(r"^(.+)\[(\d+)\]$")
+
+
+def output_layout(columns: list[str], m: int) -> dict[str, slice | int]:
+    """The graph's log-output columns by output name: an index for a scalar output, a slice
+    of ``m`` columns for an array output ``NAME[0]`` .. ``NAME[m-1]`` (in order, contiguous).
+    ValueError for any other layout; the scalar outputs of :data:`SCALAR_OUTPUTS` and
+    ``profile_um`` must lead, as every exported graph writes them."""
+    out: dict[str, slice | int] = {}
+    k = 0
+    while k < len(columns):
+        match = _ARRAY_COLUMN.match(columns[k])
+        name = match.group(1) if match else columns[k]
+        if name in out:
+            raise ValueError(f"log_output_columns: {name!r} appears twice")
+        if not match:
+            out[name] = k
+            k += 1
+            continue
+        want = [f"{name}[{j}]" for j in range(m)]
+        if columns[k:k + m] != want:
+            raise ValueError(f"log_output_columns: {name}[...] must be {m} columns "
+                             f"{want[0]} .. {want[-1]} in order")
+        out[name] = slice(k, k + m)
+        k += m
+    if list(out)[:4] != [*SCALAR_OUTPUTS, "profile_um"]:
+        raise ValueError(f"log_output_columns must start with {', '.join(SCALAR_OUTPUTS)}, "
+                         "profile_um[...]")
+    return out
 _DTYPES = {"float32": np.float32, "float64": np.float64}
 
 
@@ -91,7 +123,12 @@ class Predictor:
         self.input_ranges: dict[str, tuple[float, float]] = {s.name: s.range
                                                              for s in self.specs}
         self.profile_distance_mm = np.asarray(card["profile_distance_mm"], dtype=float)
-        self.output_names: tuple[str, ...] = (*SCALAR_OUTPUTS, "profile_um", "edge_radius_mm")
+        m = self.profile_distance_mm.size
+        self._layout = output_layout(list(card.get("log_output_columns") or
+                                          [*SCALAR_OUTPUTS, *(f"profile_um[{j}]"
+                                                              for j in range(m))]), m)
+        self.n_log_outputs = sum(1 if isinstance(v, int) else m for v in self._layout.values())
+        self.output_names: tuple[str, ...] = (*self._layout, "edge_radius_mm")
         self.kind = str(card.get("kind", ""))
         self.session = session
         self._dtype = _DTYPES[card["graph"]["dtype"]]
@@ -110,11 +147,9 @@ class Predictor:
         log_mean, log_std = self.session.run(["log_mean", "log_std"], {"x": feats})
         log_mean, log_std = log_mean.astype(float), log_std.astype(float)
         out: dict[str, np.ndarray] = {}
-        for j, name in enumerate(SCALAR_OUTPUTS):
-            out[name] = np.exp(log_mean[:, j])
-            out[f"{name}_log_std"] = log_std[:, j]
-        out["profile_um"] = np.exp(log_mean[:, 3:])
-        out["profile_um_log_std"] = log_std[:, 3:]
+        for name, cols in self._layout.items():
+            out[name] = np.exp(log_mean[:, cols])
+            out[f"{name}_log_std"] = log_std[:, cols]
         out["edge_radius_mm"] = self._edge(codes)
         if extrapolate:
             out["extrapolated"] = outside
@@ -182,5 +217,5 @@ def load_predictor(path: str | Path) -> Predictor:
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
         raise ModelFileError(CARD_NAME, f"{root / CARD_NAME}: malformed card "
                              f"(check: card values; {type(err).__name__}: {err})") from None
-    _check_graph(root, name, card, session, width, 3 + predictor.profile_distance_mm.size)
+    _check_graph(root, name, card, session, width, predictor.n_log_outputs)
     return predictor
