@@ -39,6 +39,9 @@ __all__ = ["ModelFileError", "Predictor", "PredictorInputError", "load_predictor
 SCALAR_OUTPUTS = ("center_amplitude_um", "edge_amplitude_um", "normalized_edge")
 _DTYPES = {"float32": np.float32, "float64": np.float64}
 _GRAPH_OUTPUTS = ["log_mean", "log_std"]
+#: Card key of the interval calibration (surrogate.intervals): its ``log_std_scale`` (one
+#: factor per log output column) multiplies the graph's ``log_std``; absent: factor 1.
+CALIBRATION_KEY = "interval_calibration"
 #: Rows per graph call of a large batch: encoding, graph and decoding of a chunk stay in the
 #: cache (measured on nn-default at 10,000 rows, one thread: 17 % less graph time than one call)
 CHUNK_ROWS = 1024
@@ -128,7 +131,8 @@ class Predictor:
     the encoding are compiled from the card once (:func:`compile_specs`), so a call costs a
     few array operations beyond the graph."""
 
-    def __init__(self, card: dict[str, Any], session: ort.InferenceSession) -> None:
+    def __init__(self, card: dict[str, Any], session: ort.InferenceSession, *,
+                 calibrated: bool = True) -> None:
         self.card = card
         self.specs = [InputSpec.from_dict(d) for d in card["inputs"]]
         self.input_names: tuple[str, ...] = tuple(s.name for s in self.specs)
@@ -142,6 +146,8 @@ class Predictor:
         self._edge = EdgeRadius(card["edge_radius"], self.specs)
         self._plan = compile_specs(self.specs)
         self._local = threading.local()  # per-thread buffers of the one-design path
+        self._std_scale = _std_scale(card, 3 + self.profile_distance_mm.size) if calibrated \
+            else None
 
     def features(self, X: Any, *, extrapolate: bool = False) -> tuple[np.ndarray, np.ndarray,
                                                                        np.ndarray]:
@@ -170,6 +176,9 @@ class Predictor:
             scalar_std[:, i:j] = log_std[:, :3].T
             np.exp(log_mean[:, 3:], out=profile[i:j], dtype=float)
             profile_std[i:j] = log_std[:, 3:]
+        if self._std_scale is not None:
+            scalar_std *= self._std_scale[:3, None]
+            profile_std *= self._std_scale[3:]
         out = {"center_amplitude_um": scalars[0], "center_amplitude_um_log_std": scalar_std[0],
                "edge_amplitude_um": scalars[1], "edge_amplitude_um_log_std": scalar_std[1],
                "normalized_edge": scalars[2], "normalized_edge_log_std": scalar_std[2],
@@ -192,6 +201,8 @@ class Predictor:
         self.session.run_with_iobinding(one.binding)
         amp = np.exp(one.log_mean, dtype=float)  # new arrays: nothing returned aliases a buffer
         std = one.log_std.astype(float)
+        if self._std_scale is not None:
+            std *= self._std_scale
         return {"center_amplitude_um": amp[:, 0], "center_amplitude_um_log_std": std[:, 0],
                 "edge_amplitude_um": amp[:, 1], "edge_amplitude_um_log_std": std[:, 1],
                 "normalized_edge": amp[:, 2], "normalized_edge_log_std": std[:, 2],
@@ -221,6 +232,23 @@ class _OneRow:
         self.binding.bind_cpu_input("x", self.x)
         for name, buf in zip(_GRAPH_OUTPUTS, (self.log_mean, self.log_std), strict=True):
             self.binding.bind_output(name, "cpu", 0, dtype, buf.shape, buf.ctypes.data)
+
+
+def _std_scale(card: dict[str, Any], n_out: int) -> np.ndarray | None:
+    """The card's per-column log-std factors (None without a calibration); a malformed entry
+    is a ModelFileError naming the key."""
+    entry = card.get(CALIBRATION_KEY)
+    if entry is None:
+        return None
+    try:
+        scale = np.asarray(entry["log_std_scale"], dtype=float)
+    except (KeyError, TypeError, ValueError):
+        scale = np.zeros(0)
+    if scale.shape != (n_out,) or not np.all(np.isfinite(scale) & (scale > 0)):
+        raise ModelFileError(CALIBRATION_KEY, f"{CALIBRATION_KEY}.log_std_scale must be "
+                             f"{n_out} positive factors, one per log output column "
+                             "(check: card values)")
+    return scale
 
 
 def _session(path: Path, name: str, data: bytes) -> ort.InferenceSession:
@@ -260,10 +288,11 @@ def _check_graph(path: Path, name: str, card: dict[str, Any],
                                  f"row, expected (1, {n_out}))")
 
 
-def load_predictor(path: str | Path) -> Predictor:
+def load_predictor(path: str | Path, *, calibrated: bool = True) -> Predictor:
     """Load ``models/NAME/`` as a :class:`Predictor`, after verifying the directory as a whole
     (:func:`surrogate.runtime.card.verify_model_dir`) and the graph against the card; any
-    failure is a :class:`ModelFileError` naming the file and the check."""
+    failure is a :class:`ModelFileError` naming the file and the check. ``calibrated=False``
+    reports the graph's raw ``log_std`` (what a calibration is computed from)."""
     root = Path(path)
     card = read_card(root)
     if "graph" not in card:  # the steady-state contract, whatever the kind's name
@@ -277,7 +306,7 @@ def load_predictor(path: str | Path) -> Predictor:
     name = graph["file"]
     session = _session(root, name, read_model_file(root, card, name))
     try:
-        predictor = Predictor(card, session)
+        predictor = Predictor(card, session, calibrated=calibrated)
         width = n_features(predictor.specs)
     except ModelFileError:
         raise
