@@ -42,7 +42,7 @@ def _run(args: argparse.Namespace) -> int:
                      reads=args.data)
     card = train(args.data, kind.name, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
-                 options=options)
+                 options=options, calibration_fraction=args.calibration_fraction)
     for line in kind.report(card):
         print(line)
     print(f"wrote {args.out}")
@@ -63,6 +63,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
+    p.add_argument("--calibration-fraction", type=float, default=0.0,
+                   help="share of the training rows kept out of the fit to calibrate the 95 %% "
+                   "intervals (split conformal, surrogate/intervals.py; e.g. 0.1; default 0: "
+                   "none -- calibrate later with hapticrom models calibrate-intervals)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")
     p.add_argument("--modes", type=int, default=None,
                    help="POD modes of the log profile (default: 99.99 %% energy; gp 4)")
