@@ -50,10 +50,7 @@ ERROR_FREQUENCY_HZ = 60.0
 def surrogate_std_factor(card: Mapping[str, Any]) -> float:
     """How much to widen the surrogate's log-std so its 95 % bounds cover 95 %: from the card's
     held-out ``coverage95`` of the amplitude outputs (the smallest), the factor 1.96 / z with
-    z the normal quantile that coverage implies; 1 when the card has none or covers well, and
-    when its log-std is calibrated already (``interval_calibration``: the predictor applies it)."""
-    if "interval_calibration" in card:
-        return 1.0
+    z the normal quantile that coverage implies; 1 when the card has none or covers well."""
     cov = [v.get("coverage95") for k, v in card.get("metrics", {}).items()
            if isinstance(v, dict) and k.endswith("_um")]
     cov = [c for c in cov if isinstance(c, int | float) and 0.0 < c < 0.95]

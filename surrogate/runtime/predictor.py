@@ -149,6 +149,13 @@ class Predictor:
         self._std_scale = _std_scale(card, 3 + self.profile_distance_mm.size) if calibrated \
             else None
 
+    def uncalibrated(self) -> Predictor:
+        """This model reporting the graph's raw ``log_std`` (no ``interval_calibration``
+        factors), sharing its session."""
+        if self._std_scale is None:
+            return self
+        return Predictor(self.card, self.session, calibrated=False)
+
     def features(self, X: Any, *, extrapolate: bool = False) -> tuple[np.ndarray, np.ndarray,
                                                                        np.ndarray]:
         """(codes, encoded features in the graph's dtype, extrapolated mask)."""
