@@ -23,8 +23,8 @@ FLOP-bound time at batch 10,000: the graph's FLOPs are counted from its initiali
 ``MatMul`` whose second operand is an initializer ``W`` of shape (..., k, m) costs
 2 * prod(W.shape) FLOPs per row -- and the FLOP-bound time is the time this machine's numpy
 takes for exactly those matmuls (A of shape (..., 10000, k) in the graph's dtype, one
-thread; thread CPU time, median of 5): the arithmetic the graph cannot avoid, at the rate this machine
-achieves on those very shapes (printed as GFLOP/s). Everything else in the graph
+thread; thread CPU time, median of 5): the arithmetic the graph cannot avoid, at the rate
+this machine achieves on those very shapes (printed as GFLOP/s). Everything else in the graph
 (activations, exp, reductions) is what the ratio above 1 pays for.
 """
 
