@@ -143,3 +143,18 @@ def test_a_large_batch_is_chunked_without_changing_it(trained_models):
         np.testing.assert_allclose(big[k][CHUNK_ROWS - 3:CHUNK_ROWS + 3], part[k], rtol=1e-6,
                                    atol=1e-7)
         assert big[k].flags.c_contiguous
+
+
+def test_the_command_refuses_bad_input_and_writes_nothing(model_copy, tmp_path, capsys):
+    from hapticrom.cli import main
+
+    before = (model_copy / "card.json").read_bytes()
+    assert main(["models", "calibrate-intervals", str(tmp_path / "none")]) == 2
+    assert main(["models", "calibrate-intervals", str(model_copy), "--check-fraction",
+                 "1.5"]) == 2
+    assert "--check-fraction" in capsys.readouterr().err
+    other = make_dataset(tmp_path / "other", 40)
+    assert main(["models", "calibrate-intervals", str(model_copy), "--data", str(other)]) == 2
+    assert "not the data the model was trained on" in capsys.readouterr().err
+    assert (model_copy / "card.json").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nn", "other"]
