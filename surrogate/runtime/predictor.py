@@ -7,9 +7,11 @@
 Outputs per row: ``center_amplitude_um``, ``edge_amplitude_um``, ``normalized_edge``,
 ``profile_um`` (n, m) on ``profile_distance_mm`` (distance from the unit's outer edge [mm]),
 ``edge_radius_mm`` (the unit's outer radius [mm]) and ``<output>_log_std`` (predictive std of
-the natural log of each amplitude output). Inputs are validated (:class:`PredictorInputError`
-names the input); out-of-range points raise unless ``extrapolate=True``, which adds a boolean
-``extrapolated`` array instead.
+the natural log of each amplitude output, times the card's ``interval_calibration`` factors when
+it has them, so that exp(ln value +- 1.96 log_std) covers 95 % of held-out rows;
+``load_predictor(path, calibrated=False)`` reports the graph's raw spread). Inputs are
+validated (:class:`PredictorInputError` names the input); out-of-range points raise unless
+``extrapolate=True``, which adds a boolean ``extrapolated`` array instead.
 
 This module must stay importable without torch, scikit-learn, pysindy or the FE solver.
 """
