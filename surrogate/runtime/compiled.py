@@ -21,12 +21,9 @@ from __future__ import annotations
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from surrogate.runtime.encoding import InputSpec
 
 __all__ = ["Plan", "compile_specs", "encode_row", "fast_codes", "row_codes"]
 
@@ -64,7 +61,7 @@ def _ints(values: Sequence[int]) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def _compile(specs: tuple[InputSpec, ...]) -> Plan:
+def _compile(specs: tuple[Any, ...]) -> Plan:
     index = {s.name: j for j, s in enumerate(specs)}
     src, offset, span, logf, ohf, ohk, gf, gcol, gmin = [], [], [], [], [], [], [], [], []
     row_feats = []
@@ -116,8 +113,9 @@ def _compile(specs: tuple[InputSpec, ...]) -> Plan:
         row_feats=tuple(row_feats))
 
 
-def compile_specs(specs: Sequence[InputSpec]) -> Plan:
-    """The compiled form of ``specs`` (built once per distinct spec tuple)."""
+def compile_specs(specs: Sequence[Any]) -> Plan:
+    """The compiled form of ``specs`` (``encoding.InputSpec`` records; built once per distinct
+    spec tuple)."""
     return _compile(tuple(specs))
 
 

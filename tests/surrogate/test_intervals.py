@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from synthetic import make_dataset
 
-from surrogate.intervals import Z95, _write_card, calibrate, calibrate_model_dir, coverage
+from surrogate.interval_calibration import _write_card, calibrate_model_dir
+from surrogate.intervals import Z95, calibrate, coverage
 from surrogate.runtime import ModelFileError, PredictorInputError, load_predictor
 from surrogate.runtime.card import verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, CHUNK_ROWS
