@@ -40,6 +40,10 @@ from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
 
 __all__ = ["TrainingData", "edge_radius_rule", "evaluate", "fit_kind", "load_datasets", "train"]
 
+#: Interval calibration by default: this share of the training rows, when it is at least
+#: AUTO_CALIBRATION_ROWS rows (a 95 % quantile of fewer is too noisy to ship by default)
+AUTO_CALIBRATION_FRACTION = 0.1
+AUTO_CALIBRATION_ROWS = 100
 PREDICTS = ("Harmonic steady-state vibration amplitude of a haptic unit on the skin surface: "
             "at the center, at the unit's edge, their ratio, and the amplitude-distance "
             "profile outside the edge")
@@ -186,12 +190,13 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
           test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
           overwrite: bool = False, categorical: str = "onehot",
           options: dict[str, Any] | None = None,
-          calibration_fraction: float = 0.0) -> dict[str, Any]:
+          calibration_fraction: float | None = None) -> dict[str, Any]:
     """Train a ``kind`` model (a name of :data:`surrogate.kinds.KINDS`) on ``paths``, write
     ``out``; return its card. ``calibration_fraction`` > 0 keeps that share of the training
     rows out of the fit and scales the model's log-std on them so that its 95 % intervals
     cover 95 % (:mod:`surrogate.intervals`; the card's ``interval_calibration``); the held-out
-    metrics are then those of the calibrated intervals."""
+    metrics are then those of the calibrated intervals. None (the default): 0.1 when that is at
+    least :data:`AUTO_CALIBRATION_ROWS` rows, else no calibration; 0: none."""
     # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
     # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
     from surrogate.kinds import get as get_kind
@@ -251,9 +256,13 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     return card
 
 
-def _calibration_rows(tr: np.ndarray, fraction: float, seed: int
+def _calibration_rows(tr: np.ndarray, fraction: float | None, seed: int
                       ) -> tuple[np.ndarray, np.ndarray]:
     """(fitted rows, calibration rows): a seeded ``fraction`` of the training rows kept out."""
+    if fraction is None:
+        fraction = AUTO_CALIBRATION_FRACTION
+        if round(fraction * tr.size) < AUTO_CALIBRATION_ROWS:
+            return tr, tr[:0]
     if fraction == 0:
         return tr, tr[:0]
     if not 0 < fraction < 1:

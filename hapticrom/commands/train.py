@@ -63,10 +63,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
-    p.add_argument("--calibration-fraction", type=float, default=0.0,
+    p.add_argument("--calibration-fraction", type=float, default=None,
                    help="share of the training rows kept out of the fit to calibrate the 95 %% "
-                   "intervals (split conformal, surrogate/intervals.py; e.g. 0.1; default 0: "
-                   "none -- calibrate later with hapticrom models calibrate-intervals)")
+                   "intervals (split conformal, surrogate/intervals.py; default: 0.1 when that "
+                   "is at least 100 rows, else none; 0: none -- calibrate later with hapticrom "
+                   "models calibrate-intervals)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")
     p.add_argument("--modes", type=int, default=None,
                    help="POD modes of the log profile (default: 99.99 %% energy; gp 4)")

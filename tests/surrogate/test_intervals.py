@@ -159,3 +159,17 @@ def test_the_command_refuses_bad_input_and_writes_nothing(model_copy, tmp_path, 
     assert "not the data the model was trained on" in capsys.readouterr().err
     assert (model_copy / "card.json").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nn", "other"]
+
+
+def test_training_calibrates_by_default_only_on_enough_rows():
+    from surrogate.train import AUTO_CALIBRATION_ROWS, _calibration_rows
+
+    small, big = np.arange(500), np.arange(10 * AUTO_CALIBRATION_ROWS)
+    fit, cal = _calibration_rows(small, None, 0)
+    assert cal.size == 0 and np.array_equal(fit, small)
+    fit, cal = _calibration_rows(big, None, 0)
+    assert cal.size == AUTO_CALIBRATION_ROWS and fit.size == big.size - cal.size
+    assert not set(fit) & set(cal) and set(fit) | set(cal) == set(big)
+    assert _calibration_rows(big, 0.0, 0)[1].size == 0
+    with pytest.raises(ValueError, match="must be in"):
+        _calibration_rows(big, 1.0, 0)
