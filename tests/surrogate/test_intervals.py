@@ -173,3 +173,18 @@ def test_training_calibrates_by_default_only_on_enough_rows():
     assert _calibration_rows(big, 0.0, 0)[1].size == 0
     with pytest.raises(ValueError, match="must be in"):
         _calibration_rows(big, 1.0, 0)
+
+
+def test_one_design_calls_from_many_threads_do_not_mix(trained_models):
+    from concurrent.futures import ThreadPoolExecutor
+
+    p = load_predictor(trained_models["nn"][0])
+    rows = [{**ROW, "skin_E_kPa": e} for e in np.linspace(25.0, 110.0, 8)]
+    want = [p.predict(_one(r))["center_amplitude_um"][0] for r in rows]
+
+    def work(k):
+        return [p.predict(_one(rows[(k + i) % 8]))["center_amplitude_um"][0] for i in range(40)]
+
+    with ThreadPoolExecutor(4) as pool:
+        for k, got in enumerate(pool.map(work, range(4))):
+            assert got == [want[(k + i) % 8] for i in range(40)]
