@@ -83,7 +83,9 @@ class ForwardModel:
 
     def __init__(self, predictor: Any, measurement: Measurement, fit: Sequence[str],
                  fixed: Mapping[str, Any]) -> None:
-        self.predictor = predictor
+        # the raw spread: the likelihood widens it by its own rule (fit.surrogate_std_factor)
+        self.predictor = predictor.uncalibrated() if hasattr(predictor, "uncalibrated") \
+            else predictor
         self.fit = tuple(fit)
         self.fixed = dict(fixed)
         self.measurement = measurement

@@ -30,6 +30,7 @@ from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.data.store import Store, profile_matrix
 from surrogate.data.worker import edge_radius_mm
 from surrogate.features import codes_from_frame, input_specs
+from surrogate.intervals import calibrate, residuals
 from surrogate.kind import SurrogateKind
 from surrogate.pod import ProfileTargets, output_columns
 from surrogate.registry import (
@@ -39,11 +40,15 @@ from surrogate.registry import (
     write_model,
 )
 from surrogate.runtime.encoding import InputSpec, encode
-from surrogate.runtime.predictor import Predictor, make_session
+from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
 
 __all__ = ["TrainingData", "check_outputs", "edge_radius_rule", "evaluate", "fit_kind",
            "load_datasets", "train"]
 
+#: Interval calibration by default: this share of the training rows, when it is at least
+#: AUTO_CALIBRATION_ROWS rows (a 95 % quantile of fewer is too noisy to ship by default)
+AUTO_CALIBRATION_FRACTION = 0.1
+AUTO_CALIBRATION_ROWS = 100
 PREDICTS = ("Harmonic steady-state vibration amplitude of a haptic unit on the skin surface: "
             "at the center, at the unit's edge, their ratio, and the amplitude-distance "
             "profile outside the edge")
@@ -233,10 +238,16 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
           test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
           overwrite: bool = False, categorical: str = "onehot",
           options: dict[str, Any] | None = None,
-          outputs: Sequence[str] = ("profile_um",)) -> dict[str, Any]:
+          outputs: Sequence[str] = ("profile_um",),
+          calibration_fraction: float | None = None) -> dict[str, Any]:
     """Train a ``kind`` model (a name of :data:`surrogate.kinds.KINDS`) on ``paths``, write
     ``out``; return its card. ``outputs``: the profile outputs to learn
-    (:data:`surrogate.data.columns.PROFILE_OUTPUTS`; ``profile_um`` always)."""
+    (:data:`surrogate.data.columns.PROFILE_OUTPUTS`; ``profile_um`` always).
+    ``calibration_fraction`` > 0 keeps that share of the training rows out of the fit and
+    scales the model's log-std on them so that its 95 % intervals cover 95 %
+    (:mod:`surrogate.intervals`; the card's ``interval_calibration``); the held-out metrics are
+    then those of the calibrated intervals. None (the default): 0.1 when that is at least
+    :data:`AUTO_CALIBRATION_ROWS` rows, else no calibration; 0: none."""
     # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
     # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
     from surrogate.kinds import get as get_kind
@@ -253,6 +264,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     data = load_datasets(paths, categorical=categorical, outputs=extra)
     tr, te = split(len(data.codes), test_fraction, seed)
+    tr, cal = _calibration_rows(tr, calibration_fraction, seed)
     X = encode(data.codes, data.specs)
     if n_modes is None and spec.pod_modes is not None:
         n_modes = min(spec.pod_modes, data.grid_mm.size)
@@ -294,12 +306,41 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     onnx_bytes = spec.export(est, B, b, meta)
     predictor = Predictor({**card, "files": {}}, make_session(onnx_bytes))
     card["export_parity_max_abs_dln"] = _parity(spec, est, predictor, X[te], B, b)
+    if cal.size:
+        entry = calibrate(residuals(predictor.predict(data.codes[cal]), data.center_um[cal],
+                                    data.profile_um[cal],
+                                    {name: data.extra_um[name][cal] for name in extra}),
+                          extra=extra)
+        entry["rows"] = {"from": "training rows kept out of the fit (seed + 1)",
+                         "calibration": int(cal.size)}
+        card[CALIBRATION_KEY] = entry
+        card["training"]["calibration_rows"] = int(cal.size)
+        predictor = Predictor({**card, "files": {}}, predictor.session)
     card["metrics"] = evaluate(predictor.predict(data.codes[te]), data.center_um[te],
                                data.profile_um[te],
                                {name: data.extra_um[name][te] for name in extra})
     card["training"].update(spec.card_extras(est))
     write_model(out, card, {"model.onnx": onnx_bytes}, overwrite=overwrite)
     return card
+
+
+def _calibration_rows(tr: np.ndarray, fraction: float | None, seed: int
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """(fitted rows, calibration rows): a seeded ``fraction`` of the training rows kept out."""
+    if fraction is None:
+        fraction = AUTO_CALIBRATION_FRACTION
+        if round(fraction * tr.size) < AUTO_CALIBRATION_ROWS:
+            return tr, tr[:0]
+    if fraction == 0:
+        return tr, tr[:0]
+    if not 0 < fraction < 1:
+        raise ValueError(f"calibration_fraction = {fraction}: must be in [0, 1)")
+    n = round(fraction * tr.size)
+    if n < 20:
+        raise ValueError(f"calibration_fraction = {fraction}: {n} calibration rows of "
+                         f"{tr.size}; a 95 % factor needs at least 20")
+    perm = np.random.default_rng(seed + 1).permutation(tr)
+    return np.sort(perm[n:]), np.sort(perm[:n])
 
 
 def _parity(kind: SurrogateKind, est: Any, predictor: Predictor, X: np.ndarray, B: np.ndarray,

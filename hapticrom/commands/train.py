@@ -44,7 +44,8 @@ def _run(args: argparse.Namespace) -> int:
                      reads=args.data)
     card = train(args.data, kind.name, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
-                 options=options, outputs=args.outputs.split(","))
+                 options=options, outputs=args.outputs.split(","),
+                 calibration_fraction=args.calibration_fraction)
     for line in kind.report(card):
         print(line)
     print(f"wrote {args.out}")
@@ -65,6 +66,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
+    p.add_argument("--calibration-fraction", type=float, default=None,
+                   help="share of the training rows kept out of the fit to calibrate the 95 %% "
+                   "intervals (split conformal, surrogate/intervals.py; default: 0.1 when that "
+                   "is at least 100 rows, else none; 0: none -- calibrate later with hapticrom "
+                   "models calibrate-intervals)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")
     p.add_argument("--modes", type=int, default=None,
                    help="POD modes of the log profile (default: 99.99 %% energy; gp 4)")
