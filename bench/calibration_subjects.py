@@ -5,6 +5,7 @@ space, one of the paper's three prototypes, 1-3 frequencies, each solved with th
     .venv/bin/python bench/calibration_subjects.py [--n 50] [--seed 25]
 
     .venv/bin/python bench/calibration_subjects.py --example
+    .venv/bin/python bench/calibration_subjects.py --example-ldv
 
 writes bench/data/calibration-subjects.json (about a minute on one core): per subject the true
 inputs, the design, the frequencies, and the centre and the skin-surface profile (0-20 mm from
@@ -12,7 +13,10 @@ the unit's edge, the training data's grid), each as the displacement magnitude a
 normal component |U_z| [um]. The calibration study draws its sensor layouts and noise from
 these, so reruns need no FE solve. ``--example`` writes examples/measurement-forearm.csv
 instead: one synthetic forearm (:data:`EXAMPLE`), measured by FE as a 3-axis accelerometer would
-see it (RMS acceleration magnitude, g) with 5 % noise.
+see it (RMS acceleration magnitude, g) with 5 % noise. ``--example-ldv`` writes
+examples/measurement-forearm-ldv.csv: the same synthetic forearm measured as a laser Doppler
+vibrometer would see it (peak velocity of the normal component, mm/s, on the skin around the
+unit; the models predict no normal component on the unit's own face) with 5 % noise.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ TISSUE = {"skin_E_kPa": (20.0, 120.0, True), "fat_thickness_mm": (3.0, 20.0, Fal
           "tissue_loss_factor": (0.1, 0.5, False)}
 FREQ_RANGE_HZ = (100.0, 250.0)
 EXAMPLE_CSV = ROOT / "examples" / "measurement-forearm.csv"
+EXAMPLE_LDV_CSV = ROOT / "examples" / "measurement-forearm-ldv.csv"
 #: the example subject: stiffer, thinner-fat skin than Table 1's forearm (49 kPa, 14 mm)
 EXAMPLE = {"id": 0, "design_name": "bare motor", "design": REFERENCE_DESIGNS["bare motor"],
            "truth": {"skin_E_kPa": 75.0, "fat_thickness_mm": 8.0, "tissue_loss_factor": 0.22},
@@ -45,34 +50,41 @@ EXAMPLE = {"id": 0, "design_name": "bare motor", "design": REFERENCE_DESIGNS["ba
 EXAMPLE_DISTANCES_MM = (1.0, 3.0, 5.0, 8.0, 11.0, 15.0)  # from the unit's edge
 
 
-def write_example(space, seed: int) -> None:
-    """examples/measurement-forearm.csv from one FE-solved subject."""
+def write_example(space, seed: int, *, ldv: bool = False) -> None:
+    """examples/measurement-forearm.csv (a 3-axis accelerometer: RMS acceleration magnitude at
+    the face and around the unit) or, with ``ldv``, examples/measurement-forearm-ldv.csv (an
+    LDV: peak velocity of the normal component around the unit) from one FE-solved subject."""
     from calibration.measurement import from_amplitude_m, measurement_from_rows, write_measurement
 
     rec = solve(EXAMPLE, space)
     rng = np.random.default_rng(seed)
     grid = rec["profile_distance_mm"]
+    component = "normal" if ldv else "magnitude"
+    quantity, unit, statistic = ("velocity", "mm/s", "peak") if ldv else (
+        "acceleration", "g", "rms")
     rows = []
     for i, f in enumerate(rec["frequencies_hz"]):
-        spots = [("centre", 0.0, rec["centre_um"]["magnitude"][i])]
-        spots += [("edge", d, rec["profile_um"]["magnitude"][i][grid.index(d)])
+        spots = [] if ldv else [("centre", 0.0, rec["centre_um"]["magnitude"][i])]
+        spots += [("edge", d, rec["profile_um"][component][i][grid.index(d)])
                   for d in EXAMPLE_DISTANCES_MM]
         for ref, d, amp_um in spots:
             noisy = amp_um * 1e-6 * (1.0 + 0.05 * rng.standard_normal())
-            value = from_amplitude_m(noisy, "acceleration", "g", "rms", f)
+            value = from_amplitude_m(noisy, quantity, unit, statistic, f)
             rows.append({"reference": ref, "distance_mm": d, "frequency_hz": f,
-                         "quantity": "acceleration", "unit": "g", "statistic": "rms",
-                         "component": "magnitude", "value": f"{value:.4g}",
+                         "quantity": quantity, "unit": unit, "statistic": statistic,
+                         "component": component, "value": f"{value:.4g}",
                          "uncertainty": "5%"})
     truth = ", ".join(f"{k} {v:g}" for k, v in EXAMPLE["truth"].items())
+    sensor = ("a laser Doppler vibrometer's peak velocity of the normal component" if ldv else
+              "a 3-axis accelerometer's RMS magnitude")
     m = measurement_from_rows(rows, design=EXAMPLE["design"], meta={
         "subject": "synthetic forearm (not a person): FE solve of the bare motor unit glued on "
                    f"a forearm with {truth}",
-        "source": f"python bench/calibration_subjects.py --example (FE solver "
-                  f"{SOLVER_VERSION}, 5 % Gaussian noise, seed {seed}); a 3-axis "
-                  "accelerometer's RMS magnitude"})
-    write_measurement(m, EXAMPLE_CSV)
-    print(f"wrote {EXAMPLE_CSV}")
+        "source": f"python bench/calibration_subjects.py --example{'-ldv' if ldv else ''} (FE "
+                  f"solver {SOLVER_VERSION}, 5 % Gaussian noise, seed {seed}); {sensor}"})
+    path = EXAMPLE_LDV_CSV if ldv else EXAMPLE_CSV
+    write_measurement(m, path)
+    print(f"wrote {path}")
 
 
 def draw(n: int, seed: int) -> list[dict]:
@@ -119,10 +131,12 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=CACHE)
     ap.add_argument("--example", action="store_true",
                     help="write examples/measurement-forearm.csv instead")
+    ap.add_argument("--example-ldv", action="store_true",
+                    help="write examples/measurement-forearm-ldv.csv instead")
     args = ap.parse_args()
     space = Store.open(DATASET).space
-    if args.example:
-        write_example(space, args.seed)
+    if args.example or args.example_ldv:
+        write_example(space, args.seed, ldv=args.example_ldv)
         return
     t0 = time.perf_counter()
     subjects = []

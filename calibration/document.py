@@ -28,9 +28,12 @@ SCHEMA_VERSION = 1
 LIKELIHOOD = ("ln y ~ N(ln mu(theta), diag((sigma_i/y_i)^2) + k^2 diag(s) C diag(s)): y the "
               "measured peak displacement amplitudes, sigma_i their stated standard "
               "uncertainties, mu the surrogate's prediction, s its predictive log-std (95 % "
-              "bounds exp(+-1.96 s)), k the surrogate's std factor, C the correlation of its "
-              "errors: exp(-|d_i - d_j| / error_length_mm) along the profile times "
-              "exp(-|f_i - f_j| / error_frequency_hz), none between the face and the profile")
+              "bounds exp(+-1.96 s); surrogate_spread 'posterior': s held fixed at its root-mean-"
+              "square over the late burn-in walkers, 'local': s at each theta), k the "
+              "surrogate's std factor, C the correlation of its "
+              "errors: exp(-|d_i - d_j| / error_length_mm[output]) along a profile output times "
+              "exp(-|f_i - f_j| / error_frequency_hz), none between points of different "
+              "outputs (the face and the profile, the magnitude and the normal component)")
 
 
 class CalibrationFileError(FieldError):
@@ -88,7 +91,8 @@ def calibration_document(cal: Calibration, *, model_path: str, tissue_names: lis
         "priors": {p.name: p.to_dict() for p in cal.priors},
         "likelihood": {"text": LIKELIHOOD, "surrogate_std_factor": _r(cal.std_factor, 4),
                        "error_length_mm": cal.error_length_mm,
-                       "error_frequency_hz": cal.error_frequency_hz},
+                       "error_frequency_hz": cal.error_frequency_hz,
+                       "surrogate_spread": cal.spread},
         "sampler": {k: (_r(v, 4) if isinstance(v, float) else
                         [_r(x, 4) for x in v] if isinstance(v, list) else v)
                     for k, v in cal.sampler.items()},

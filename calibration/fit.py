@@ -4,7 +4,7 @@ emcee's ensemble sampler on the run-time surrogate.
 Likelihood (docs/calibration.md): each measured amplitude y_i (peak displacement [m], converted
 by :mod:`calibration.measurement`) is log-normal about the surrogate's prediction mu_i(theta),
 
-    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s(theta)) C diag(s(theta))),
+    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s) C diag(s)),
 
 with sigma_i the stated standard uncertainty (independent between points), s_i the
 surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened by ``k`` =
@@ -12,6 +12,15 @@ surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened 
 narrow, and C the correlation of the surrogate's errors between points
 (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
 too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
+
+The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
+"posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
+burn-in (over the starting walkers when there is no burn-in). Evaluated at every theta
+(``spread = "local"``, as before), the normalising term -1/2 ln det of the covariance moved
+with the ensemble's spread: by 5.2 nats (a factor of about 180) along the fat thickness at
+fixed skin and loss for one synthetic subject (the ensemble has 5 members, so its spread is
+itself a noisy estimate), an implicit prior towards wherever the members happen to agree
+(docs/calibration.md, "The fit" and "Proven on synthetic subjects").
 
 Sampling: ``walkers`` walkers started at the best of ``n_init`` prior draws (one vectorised
 surrogate call), differential-evolution moves (emcee's DEMove 0.8 / DESnookerMove 0.2: robust
@@ -34,17 +43,22 @@ from calibration.forward import ForwardModel
 from calibration.measurement import Measurement
 from calibration.priors import Prior, PriorError, priors_for
 
-__all__ = ["IDENTIFIABLE_WIDTH_RATIO", "Calibration", "calibrate", "surrogate_std_factor"]
+__all__ = ["IDENTIFIABLE_WIDTH_RATIO", "SPREADS", "Calibration", "calibrate",
+           "surrogate_std_factor"]
 
 #: a parameter whose 95 % posterior interval is wider than this fraction of its prior's 95 %
 #: interval (in the sampling coordinate) is reported as not determined by the data
 IDENTIFIABLE_WIDTH_RATIO = 0.8
 Z95 = 1.959964
 KEPT_SAMPLES = 400  # posterior draws stored in the calibration document
-#: correlation of the surrogate's errors along the profile [mm] and across frequencies [Hz]
-#: (measured by bench/bench_calibration.py --residuals on FE solves apart from the study's)
-ERROR_LENGTH_MM = 20.0
+#: correlation length of the surrogate's errors along each profile output [mm] and across
+#: frequencies [Hz] (measured by bench/bench_calibration.py --residuals on FE solves apart from
+#: the study's: 19.2 mm for nn-default's magnitude profile and 22.1 mm for nn-normal's, 4.5 mm
+#: for nn-normal's normal component, whose error is dominated by the dips of |u_z|; 60 Hz)
+ERROR_LENGTH_MM = {"profile_um": 20.0, "profile_normal_um": 4.5}
 ERROR_FREQUENCY_HZ = 60.0
+#: how the surrogate's spread enters the likelihood (see the module docstring)
+SPREADS = ("posterior", "local")
 
 
 def surrogate_std_factor(card: Mapping[str, Any]) -> float:
@@ -72,8 +86,9 @@ class Calibration:
     log_prob: np.ndarray  # (n,)
     std_factor: float
     sampler: dict[str, Any] = field(default_factory=dict)
-    error_length_mm: float = ERROR_LENGTH_MM
+    error_length_mm: dict[str, float] = field(default_factory=dict)  # per profile output
     error_frequency_hz: float = ERROR_FREQUENCY_HZ
+    spread: str = "posterior"
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -122,6 +137,17 @@ class Calibration:
         return mean, self.std_factor * std
 
 
+def _fixed_log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
+                          k: float, corr: np.ndarray) -> np.ndarray:
+    """As :func:`_log_likelihood` with one covariance for every row: ``std`` (m,) fixed."""
+    cov = (k * std)[:, None] * corr * (k * std)[None, :]
+    cov[np.arange(y.size), np.arange(y.size)] += rel ** 2
+    chol = np.linalg.cholesky(cov)
+    w = np.linalg.solve(chol, (y - mean).T)
+    logdet = 2.0 * np.sum(np.log(np.diagonal(chol)))
+    return -0.5 * (np.sum(w ** 2, axis=0) + logdet + y.size * np.log(2 * np.pi))
+
+
 def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
                     k: float, corr: np.ndarray) -> np.ndarray:
     """Gaussian log-likelihood of ln y for each row of ``mean``/``std`` (n, m): covariance
@@ -140,15 +166,21 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
               walkers: int = 32, steps: int = 1000, burn: int = 333, n_init: int = 4096,
               seed: int = 0, std_factor: float | None = None,
-              error_length_mm: float = ERROR_LENGTH_MM,
-              error_frequency_hz: float = ERROR_FREQUENCY_HZ) -> Calibration:
+              error_length_mm: float | None = None,
+              error_frequency_hz: float = ERROR_FREQUENCY_HZ,
+              spread: str = "posterior") -> Calibration:
     """Sample the posterior of the inputs ``fit`` (model input names) given ``measurement``.
 
     Inputs not fitted come from ``fixed``, then the measurement's ``site`` and ``design``
     (model units); a model input with no value is an error naming it. ``priors``: given priors
-    (``NAME=KIND:A,B``), the rest default (:mod:`calibration.priors`)."""
+    (``NAME=KIND:A,B``), the rest default (:mod:`calibration.priors`). ``spread``: how the
+    surrogate's spread enters the likelihood (:data:`SPREADS`, module docstring);
+    ``error_length_mm``: one correlation length for every profile output, instead of
+    :data:`ERROR_LENGTH_MM`'s per output."""
     if not 0 <= burn < steps:
         raise PriorError("steps", f"steps {steps} must exceed burn {burn} >= 0")
+    if spread not in SPREADS:
+        raise PriorError("spread", f"spread {spread!r}: allowed {', '.join(SPREADS)}")
     prs = priors_for(fit, predictor.specs, priors)
     values = {**measurement.design, **measurement.site, **(fixed or {})}
     # a fitted input that also has a value (a site. line): the fit wins, the value is a guess
@@ -166,7 +198,14 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     fwd = ForwardModel(predictor, measurement, [p.name for p in prs], given)
     k = surrogate_std_factor(predictor.card) if std_factor is None else std_factor
     y, rel = fwd.y, fwd.rel_sigma
-    corr = fwd.error_correlation(error_length_mm, error_frequency_hz)
+    lengths = {o: (ERROR_LENGTH_MM.get(o, ERROR_LENGTH_MM["profile_um"])
+                   if error_length_mm is None else float(error_length_mm))
+               for o in fwd.profile_outputs}
+    corr = fwd.error_correlation(lengths, error_frequency_hz)
+    fixed_std: list[np.ndarray] = []  # the surrogate's spread held fixed ("posterior")
+
+    def x_of(z: np.ndarray) -> np.ndarray:
+        return np.column_stack([p.from_z(z[:, j]) for j, p in enumerate(prs)])
 
     def log_post(z: np.ndarray) -> np.ndarray:
         z = np.atleast_2d(z)
@@ -174,28 +213,51 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
         ok = np.isfinite(lp)
         out = np.full(z.shape[0], -np.inf)
         if ok.any():
-            x = np.column_stack([p.from_z(z[ok, j]) for j, p in enumerate(prs)])
-            mean, std = fwd.predict(x)
-            out[ok] = lp[ok] + _log_likelihood(mean, std, y, rel, k, corr)
+            mean, std = fwd.predict(x_of(z[ok]))
+            out[ok] = lp[ok] + (_fixed_log_likelihood(mean, fixed_std[-1], y, rel, k, corr)
+                                if fixed_std else
+                                _log_likelihood(mean, std, y, rel, k, corr))
         return out
 
+    def rms_std(z: np.ndarray) -> np.ndarray:
+        """The surrogate's spread per point, root-mean-square over the rows of ``z``."""
+        return np.sqrt(np.mean(fwd.predict(x_of(z))[1] ** 2, axis=0))
+
     import emcee  # here, so that reading a calibration (the planner) needs numpy only
+
+    def sampler_for() -> Any:
+        s = emcee.EnsembleSampler(
+            walkers, len(prs), log_post, vectorize=True,
+            moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
+        s.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
+        return s
 
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
     z0 = np.column_stack([p.sample_z(n_init, rng) for p in prs])
+    if spread == "posterior":  # rank the prior draws at their median spread
+        fixed_std.append(np.median(fwd.predict(x_of(z0))[1], axis=0))
     lp0 = log_post(z0)
     start = z0[np.argsort(lp0)[::-1][:walkers]]
-    sampler = emcee.EnsembleSampler(
-        walkers, len(prs), log_post, vectorize=True,
-        moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
-    sampler.random_state = np.random.RandomState(int(rng.integers(2**31))).get_state()
-    sampler.run_mcmc(start, steps, progress=False)
-    chain = sampler.get_chain(discard=burn, flat=True)
-    lps = sampler.get_log_prob(discard=burn, flat=True)
-    samples = np.column_stack([p.from_z(chain[:, j]) for j, p in enumerate(prs)])
+    if spread == "local":
+        sampler = sampler_for()
+        sampler.run_mcmc(start, steps, progress=False)
+        kept = burn
+    else:
+        fixed_std.append(rms_std(start))
+        if burn:
+            pilot = sampler_for()
+            pilot.run_mcmc(start, burn, progress=False)
+            fixed_std.append(rms_std(pilot.get_chain(discard=burn // 2, flat=True)))
+            start = pilot.get_last_sample().coords
+        sampler = sampler_for()  # the kept chain: one fixed likelihood from its first step
+        sampler.run_mcmc(start, steps - burn, progress=False)
+        kept = 0
+    chain = sampler.get_chain(discard=kept, flat=True)
+    lps = sampler.get_log_prob(discard=kept, flat=True)
+    samples = x_of(chain)
     try:
-        tau = sampler.get_autocorr_time(discard=burn, tol=0)
+        tau = sampler.get_autocorr_time(discard=kept, tol=0)
     except emcee.autocorr.AutocorrError:  # pragma: no cover - tol=0 never raises
         tau = np.full(len(prs), np.nan)
     info = {"library": "emcee", "version": emcee.__version__, "walkers": walkers,
@@ -205,5 +267,5 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
             "autocorr_steps": [float(t) for t in tau],
             "effective_samples": float(walkers * (steps - burn) / max(np.nanmax(tau), 1.0)),
             "wall_s": time.perf_counter() - t0}
-    return Calibration(measurement, fwd, prs, samples, lps, k, info, error_length_mm,
-                       error_frequency_hz)
+    return Calibration(measurement, fwd, prs, samples, lps, k, info, lengths,
+                       error_frequency_hz, spread)

@@ -9,9 +9,11 @@ Which model output a point reads is set by its reference and its component:
   profile output at distance d from the edge, log-linearly interpolated on the model's
   profile grid (its log-std linearly);
 * component ``magnitude``: ``center_amplitude_um`` / ``profile_um``; component ``normal``:
-  the outputs listed in :data:`NORMAL_OUTPUTS` (a model trained on the normal component
-  |U_z| returns them under one of these names). A model without them cannot be calibrated on
-  normal-component points, and the error says so.
+  the outputs listed in :data:`NORMAL_OUTPUTS` (``models/nn-normal`` returns
+  ``profile_normal_um``, |U_z| on the skin around the unit, trained on the datasets'
+  ``profile_uz_um``). The datasets store no normal component at the unit's own face, so no
+  shipped model predicts one there: a normal-component row at the face is refused by name, as
+  is every normal-component row for a model without a normal output.
 
 Points under the unit (0 < r < edge radius), beyond the profile grid, or at a frequency
 outside the model's range are bad rows of the measurement (:class:`MeasurementError`).
@@ -27,24 +29,29 @@ import numpy as np
 
 from calibration.measurement import Measurement, MeasurementError
 
-__all__ = ["MAGNITUDE_OUTPUTS", "NORMAL_OUTPUTS", "ForwardModel", "outputs_for"]
+__all__ = ["MAGNITUDE_OUTPUTS", "NORMAL_OUTPUTS", "ForwardModel", "needs_normal",
+           "output_for"]
 
-#: component -> (centre output, profile output) of the predictor
+#: (centre output, profile output) of the magnitude
 MAGNITUDE_OUTPUTS = ("center_amplitude_um", "profile_um")
-#: accepted names of normal-component outputs, (centre, profile), first found is used
-NORMAL_OUTPUTS = (("center_normal_um", "profile_normal_um"),
-                  ("center_uz_um", "profile_uz_um"))
+#: accepted names of normal-component outputs: at the face (centre) and on the profile; the
+#: first one a model has is used
+NORMAL_OUTPUTS = {"centre": ("center_normal_um", "center_uz_um"),
+                  "profile": ("profile_normal_um", "profile_uz_um")}
 
 
-def outputs_for(component: str, available: Sequence[str]) -> tuple[str, str] | None:
-    """(centre output, profile output) that predict ``component``, or None if the model has
-    none."""
+def output_for(component: str, at_face: bool, available: Sequence[str]) -> str | None:
+    """The predictor output that predicts ``component`` at the unit's face (``at_face``) or
+    on the profile around it, or None if the model has none."""
     if component == "magnitude":
-        return MAGNITUDE_OUTPUTS
-    for pair in NORMAL_OUTPUTS:
-        if all(name in available for name in pair):
-            return pair
-    return None
+        return MAGNITUDE_OUTPUTS[0 if at_face else 1]
+    names = NORMAL_OUTPUTS["centre" if at_face else "profile"]
+    return next((n for n in names if n in available), None)
+
+
+def needs_normal(measurement: Measurement) -> bool:
+    """Whether any point of ``measurement`` is of the normal component."""
+    return any(p.component == "normal" for p in measurement.points)
 
 
 def _interp_weights(grid: np.ndarray, d: float) -> np.ndarray:
@@ -58,13 +65,12 @@ def _interp_weights(grid: np.ndarray, d: float) -> np.ndarray:
 
 @dataclass
 class _Group:
-    """The points of one (component) read from the rows of one frequency block."""
+    """The points that read one predictor output (a scalar at the face, or a profile)."""
 
-    centre_out: str
-    profile_out: str
+    output: str
+    face: bool  # the output is the scalar at the unit's face (else a profile)
     rows: np.ndarray  # predictor row (frequency index) per point
-    centre: np.ndarray  # bool per point: reads the centre output
-    weights: np.ndarray  # (n_points, n_grid) profile interpolation weights
+    weights: np.ndarray  # (n_points, n_grid) profile interpolation weights (zero at the face)
     index: np.ndarray  # position of each point in the measurement
 
 
@@ -77,7 +83,9 @@ class ForwardModel:
 
     def __init__(self, predictor: Any, measurement: Measurement, fit: Sequence[str],
                  fixed: Mapping[str, Any]) -> None:
-        self.predictor = predictor
+        # the raw spread: the likelihood widens it by its own rule (fit.surrogate_std_factor)
+        self.predictor = predictor.uncalibrated() if hasattr(predictor, "uncalibrated") \
+            else predictor
         self.fit = tuple(fit)
         self.fixed = dict(fixed)
         self.measurement = measurement
@@ -102,7 +110,8 @@ class ForwardModel:
         available = tuple(out)
         lo_f, hi_f = predictor.input_ranges.get("frequency_hz", (-np.inf, np.inf))
         errors: list[tuple[str, str]] = []
-        groups: dict[str, list[tuple[int, bool, np.ndarray, int]]] = {}
+        groups: dict[str, list[tuple[int, np.ndarray, int]]] = {}
+        model = predictor.card.get("name")
         for k, p in enumerate(pts):
             where = f"row {p.row}"
             if not lo_f <= p.frequency_hz <= hi_f:
@@ -110,15 +119,26 @@ class ForwardModel:
                                f"{p.frequency_hz:g} Hz is outside the model's range "
                                f"[{lo_f:g}, {hi_f:g}] Hz"))
                 continue
-            if outputs_for(p.component, available) is None:
-                errors.append((f"{where}: component", f"{where}, column component: the model "
-                               f"{predictor.card.get('name')!r} predicts no normal component "
-                               "(its outputs are magnitudes); give component = magnitude or "
-                               "use a model with a normal-component output "
-                               f"({' / '.join(n[1] for n in NORMAL_OUTPUTS)})"))
+            at_centre = p.reference == "centre" and p.distance_m == 0.0
+            output = output_for(p.component, at_centre, available)
+            if output is None and output_for(p.component, False, available) is None:
+                errors.append((f"{where}: component", f"{where}, column component: "
+                               f"{p.component!r}: the model {model!r} predicts no normal "
+                               "component (its outputs are magnitudes); use a model with a "
+                               f"normal-component output ({NORMAL_OUTPUTS['profile'][0]}: "
+                               "models/nn-normal, which hapticrom calibrate picks when --model "
+                               "is not given) or give component = magnitude"))
+                continue
+            if output is None:
+                errors.append((f"{where}: component", f"{where}, column component: "
+                               f"{p.component!r} at the unit's face (centre, 0 mm): the model "
+                               f"{model!r} predicts the normal component only on the skin "
+                               "around the unit (0-"
+                               f"{grid_mm[-1]:g} mm from its edge; its training data store no "
+                               "normal component at the face); measure the face as magnitude "
+                               "or leave the row out"))
                 continue
             d = p.distance_m - (self.edge_radius_m if p.reference == "centre" else 0.0)
-            at_centre = p.reference == "centre" and p.distance_m == 0.0
             if not at_centre and not self.grid_m[0] <= d <= self.grid_m[-1] + 1e-12:
                 r_edge = self.edge_radius_m * 1e3
                 allowed = (f"0 (the unit's face) or [{r_edge + grid_mm[0]:g}, "
@@ -132,34 +152,46 @@ class ForwardModel:
             w = (np.zeros(grid_mm.size) if at_centre else
                  _interp_weights(self.grid_m, min(d, self.grid_m[-1])))
             row = int(np.searchsorted(self.frequencies_hz, p.frequency_hz))
-            groups.setdefault(p.component, []).append((row, at_centre, w, k))
+            groups.setdefault(output, []).append((row, w, k))
         if errors:
             lines = "\n  ".join(m for _, m in errors[:25])
             raise MeasurementError(errors[0][0], f"{measurement.source or 'measurement'}: "
                                    f"{len(errors)} row(s) the model cannot predict:\n  {lines}")
-        self.groups = []
-        for component, items in groups.items():
-            c_out, p_out = outputs_for(component, available)  # type: ignore[misc]
-            self.groups.append(_Group(
-                c_out, p_out, np.array([i[0] for i in items]), np.array([i[1] for i in items]),
-                np.array([i[2] for i in items]), np.array([i[3] for i in items])))
+        face_outputs = (MAGNITUDE_OUTPUTS[0], *NORMAL_OUTPUTS["centre"])
+        self.groups = [_Group(output, output in face_outputs, np.array([i[0] for i in items]),
+                              np.array([i[1] for i in items]), np.array([i[2] for i in items]))
+                       for output, items in groups.items()]
 
-    def error_correlation(self, length_mm: float, frequency_scale_hz: float) -> np.ndarray:
+    def error_correlation(self, length_mm: float | Mapping[str, float],
+                          frequency_scale_hz: float) -> np.ndarray:
         """(m, m) correlation of the surrogate's errors between the measured points: along
-        the profile exp(-|d_i - d_j| / length_mm), between frequencies
-        exp(-|f_i - f_j| / frequency_scale_hz), none between the unit's face and the profile
-        (see docs/calibration.md for how these were measured)."""
+        a profile exp(-|d_i - d_j| / length_mm), between frequencies
+        exp(-|f_i - f_j| / frequency_scale_hz), none between points read from different
+        outputs (the unit's face and the profile; the magnitude and the normal component).
+        ``length_mm``: one length, or one per profile output name (see docs/calibration.md
+        for how these were measured)."""
         m = self.y.size
         d = np.zeros(m)
         face = np.zeros(m, dtype=bool)
+        which = np.zeros(m, dtype=int)
+        length = np.ones(m)
         f = np.array([p.frequency_hz for p in self.measurement.points])
-        for g in self.groups:
+        for i, g in enumerate(self.groups):
             d[g.index] = g.weights @ (self.grid_m * 1e3)
-            face[g.index] = g.centre
-        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length_mm)
-        same = face[:, None] == face[None, :]
+            face[g.index] = g.face
+            which[g.index] = i
+            if not g.face:
+                length[g.index] = (length_mm if isinstance(length_mm, int | float)
+                                   else length_mm[g.output])
+        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length[:, None])
+        same = which[:, None] == which[None, :]
         rho = np.where(same, np.where(face[:, None], 1.0, rho_d), 0.0)
         return rho * np.exp(-np.abs(f[:, None] - f[None, :]) / frequency_scale_hz)
+
+    @property
+    def profile_outputs(self) -> tuple[str, ...]:
+        """The profile outputs the measured points read."""
+        return tuple(g.output for g in self.groups if not g.face)
 
     def _rows(self, theta: np.ndarray) -> dict[str, np.ndarray]:
         """Predictor inputs by name: one row per (parameter vector, frequency), frequency
@@ -194,13 +226,13 @@ class ForwardModel:
         mean = np.empty((n, self.y.size))
         std = np.empty((n, self.y.size))
         for g in self.groups:
-            lc = np.log(out[g.centre_out].reshape(n, nf) * 1e-6)
-            sc = out[f"{g.centre_out}_log_std"].reshape(n, nf)
-            lp = np.log(out[g.profile_out].reshape(n, nf, -1) * 1e-6)
-            sp = out[f"{g.profile_out}_log_std"].reshape(n, nf, -1)
+            if g.face:
+                mean[:, g.index] = np.log(out[g.output].reshape(n, nf) * 1e-6)[:, g.rows]
+                std[:, g.index] = out[f"{g.output}_log_std"].reshape(n, nf)[:, g.rows]
+                continue
+            lp = np.log(out[g.output].reshape(n, nf, -1) * 1e-6)
+            sp = out[f"{g.output}_log_std"].reshape(n, nf, -1)
             # per point: its frequency row, then the interpolation weights on the grid
-            pm = np.einsum("npg,pg->np", lp[:, g.rows, :], g.weights)
-            ps = np.einsum("npg,pg->np", sp[:, g.rows, :], g.weights)
-            mean[:, g.index] = np.where(g.centre, lc[:, g.rows], pm)
-            std[:, g.index] = np.where(g.centre, sc[:, g.rows], ps)
+            mean[:, g.index] = np.einsum("npg,pg->np", lp[:, g.rows, :], g.weights)
+            std[:, g.index] = np.einsum("npg,pg->np", sp[:, g.rows, :], g.weights)
         return mean, std

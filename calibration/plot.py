@@ -11,21 +11,24 @@ import numpy as np
 
 import figstyle
 from calibration.fit import Z95, Calibration
-from calibration.forward import ForwardModel
+from calibration.forward import ForwardModel, output_for
 from calibration.measurement import measurement_from_rows
 
 __all__ = ["write_calibration_plot"]
 
 
 def _dense(cal: Calibration, step_mm: float = 0.5) -> tuple[ForwardModel, list[tuple]]:
-    """A forward model on a dense set of points: the face and the profile grid, for each
-    measured (frequency, component)."""
-    grid = np.asarray(cal.forward.predictor.profile_distance_mm, dtype=float)
+    """A forward model on a dense set of points: the face (where the model predicts the
+    component there) and the profile grid, for each measured (frequency, component)."""
+    predictor = cal.forward.predictor
+    grid = np.asarray(predictor.profile_distance_mm, dtype=float)
     dist = np.arange(grid[0], grid[-1] + 1e-9, step_mm)
     keys = sorted({(p.frequency_hz, p.component) for p in cal.measurement.points})
+    available = predictor.output_names
     rows, tags = [], []
     for f, comp in keys:
-        for ref, d in [("centre", 0.0), *[("edge", x) for x in dist]]:
+        face = [("centre", 0.0)] if output_for(comp, True, available) else []
+        for ref, d in [*face, *[("edge", x) for x in dist]]:
             rows.append({"reference": ref, "distance_mm": d, "frequency_hz": f,
                          "quantity": "displacement", "unit": "um", "statistic": "peak",
                          "component": comp, "value": 1.0, "uncertainty": 0.1})
@@ -55,8 +58,10 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
             ax.fill_between(radius[sel], lo[sel], hi[sel], color=c, alpha=0.25, lw=0)
             ax.plot(radius[sel], mid[sel], color=c, lw=1.2,
                     label=f"{f:g} Hz {comp}: calibrated model, 95 % band")
-            ax.errorbar([0.0], mid[face], yerr=[mid[face] - lo[face], hi[face] - mid[face]],
-                        color=c, fmt="_", ms=14, capsize=0, lw=6, alpha=0.35)
+            if face.any():
+                ax.errorbar([0.0], mid[face], yerr=[mid[face] - lo[face],
+                                                    hi[face] - mid[face]],
+                            color=c, fmt="_", ms=14, capsize=0, lw=6, alpha=0.35)
             pts = [p for p in cal.measurement.points
                    if (p.frequency_hz, p.component) == (f, comp)]
             r = [p.distance_m * 1e3 + (r_edge_mm if p.reference == "edge" else 0.0) for p in pts]

@@ -52,10 +52,11 @@ def synthetic_measurement(subject: Mapping[str, Any], *, rel_noise: float, n_poi
                           rng: np.random.Generator, component: str = "magnitude",
                           sensor: str | None = None) -> Measurement:
     """A noisy measurement of ``subject``: ``n_points`` positions (the unit's face with
-    probability 1/2, the rest distinct whole-mm distances from the edge on the profile grid),
-    each at every frequency of the subject."""
+    probability 1/2 for the magnitude, never for the normal component, which no model predicts
+    there; the rest distinct whole-mm distances from the edge on the profile grid), each at
+    every frequency of the subject."""
     grid = np.asarray(subject["profile_distance_mm"], dtype=float)
-    with_face = bool(rng.integers(2))
+    with_face = bool(rng.integers(2)) and component == "magnitude"
     far = rng.choice(grid.size, size=n_points - int(with_face), replace=False)
     sensor = sensor or str(rng.choice(list(SENSORS)))
     quantity, unit, statistic = SENSORS[sensor]

@@ -122,7 +122,7 @@ def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES, operator: bool = True) -
     op = (SweepOperator.build(problem, float(w.min()), float(w.max()), n_nodes) if operator
           else None)
     points = probes.output_points(scene, problem)
-    scale = scene.load.kind.actuator.load_scale(w, problem.omega)  # e.g. an ERM's m e omega^2
+    scale = scene.load.kind.actuator.load_scale(w, problem.omega, scene)  # an ERM's m e w^2
     return SweepSetup(scene, problem, op, points, freqs, scale)
 
 
@@ -171,7 +171,7 @@ def direct_sweep(scene: Scene, frequency_hz: NDArray | None = None) -> SweepResu
     freqs = s.frequency_hz if frequency_hz is None else np.asarray(frequency_hz, float)
     p = s.problem
     stretch = p.domain.stretch
-    scales = scene.load.kind.actuator.load_scale(2 * np.pi * freqs, p.omega)
+    scales = scene.load.kind.actuator.load_scale(2 * np.pi * freqs, p.omega, scene)
     values, dofs = [], 0
     for f, scale in zip(freqs, scales, strict=True):
         w = 2 * np.pi * f

@@ -6,13 +6,14 @@ lower what the one before allows:
 
 1. **the device**: the limits it reports in STATUS (``max_level``, ``max_on_ms``,
    ``watchdog_ms``; docs/protocol.md). ``sim`` and ``log`` report none.
-2. **the actuator**: its rated values (:class:`ActuatorRating`). The level limit is the motor's
-   maximum voltage over the nominal drive voltage at the plan's frequency (levels are fractions
-   of that nominal voltage; at the rated frequency the nominal voltage is the rated voltage, so
-   the limit is max / rated voltage). The nominal voltage is recomputed from the actuator's
-   speed law, never read from the plan. On-time, duty cycle, watchdog and the exposure action
-   value have no rated value for an ERM; the project's defaults stand in for them
-   (:class:`hardware.safety.SafetyLimits`, stated as such).
+2. **the actuator**: its rated values (:class:`ActuatorRating`: the defaults of the drive law
+   of the plan's ``timing.actuator``, :func:`rating_of`; never parameters read from the plan).
+   The level limit is the actuator's maximum voltage over the nominal drive voltage at the
+   plan's frequency (levels are fractions of that nominal voltage; for the ERM at the rated
+   frequency the nominal voltage is the rated voltage, so the limit is max / rated voltage).
+   The nominal voltage is recomputed from the actuator's drive law. On-time, duty cycle,
+   watchdog and the exposure action value have no rated value for an ERM; the project's
+   defaults stand in for them (:class:`hardware.safety.SafetyLimits`, stated as such).
 3. **the user**: ``--max-level``, ``--max-on-ms``, ``--max-duty``, ``--watchdog-ms``,
    ``--exposure-action`` or a limits file (:func:`load_user_limits`); a value above the limit it
    would replace is refused (exit 2), not silently ignored.
@@ -35,10 +36,10 @@ from fieldspec import Context, Spec, read_table, require_table
 from fieldspec.toml import read_toml_file
 from hardware.safety import LEVEL_TOLERANCE, SafetyError, SafetyLimits, check_schedule
 from hardware.schedule import PlanFile, Schedule
-from motorlaw import SpeedLaw
+from motorlaw import DriveLaw, SpeedLaw, drive_law
 
 __all__ = ["ERM_RATING", "USER_KEYS", "ActuatorRating", "DeviceLimits", "Resolved",
-           "load_user_limits", "preflight", "resolve_limits"]
+           "load_user_limits", "preflight", "rating_of", "resolve_limits"]
 
 MAX_WIRE_LEVEL = 8.0  # the protocol's int16 level range, about +-8 nominal
 NOMINAL_TOLERANCE = 0.01  # relative: the plan's nominal voltage against the actuator's law
@@ -46,21 +47,28 @@ NOMINAL_TOLERANCE = 0.01  # relative: the plan's nominal voltage against the act
 
 @dataclass(frozen=True)
 class ActuatorRating:
-    """An ERM's rated values: the steady-speed law (``rated_frequency_hz`` rev/s at
-    ``rated_voltage_V``, stiction below ``start_voltage_V``) and the largest voltage it may be
-    driven with, ``max_voltage_V`` [V]; ``source`` says where the numbers come from."""
+    """An actuator's rated values: its drive law (:mod:`motorlaw`: the nominal voltage at a
+    frequency, the largest voltage it may be driven with, ``max_voltage_V`` [V], and the law's
+    parameters as attributes, e.g. the ERM's ``rated_frequency_hz``); ``source`` says where
+    the numbers come from."""
 
     name: str
-    rated_voltage_V: float
-    rated_frequency_hz: float
-    start_voltage_V: float
-    max_voltage_V: float
+    law: DriveLaw
     source: str
 
+    def __getattr__(self, name: str) -> float:  # the law's parameters
+        if name == "law" or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.law, name)
+
+    @property
+    def max_voltage_V(self) -> float:
+        return self.law.max_voltage_V
+
     def nominal_voltage_V(self, frequency_hz: float) -> float:
-        """The steady voltage spinning the motor at ``frequency_hz`` [V]."""
-        per_hz = (self.rated_voltage_V - self.start_voltage_V) / self.rated_frequency_hz
-        return self.start_voltage_V + frequency_hz * per_hz
+        """The steady voltage of the nominal vibration at ``frequency_hz`` [V] (the ERM's:
+        spinning the motor at it)."""
+        return self.law.nominal_voltage_V(frequency_hz)
 
     def level_limit(self, frequency_hz: float) -> float:
         """The largest level (a multiple of the nominal voltage at ``frequency_hz``)."""
@@ -68,16 +76,27 @@ class ActuatorRating:
 
     @property
     def max_frequency_hz(self) -> float:
-        """The fastest steady speed within the voltage limit [rev/s]."""
-        per_hz = (self.rated_voltage_V - self.start_voltage_V) / self.rated_frequency_hz
-        return (self.max_voltage_V - self.start_voltage_V) / per_hz
+        """The highest frequency reached within the voltage limit [Hz]."""
+        return self.law.band_hz()[1]
+
+
+def rating_of(plan: PlanFile) -> ActuatorRating:
+    """The rating of the plan's actuator kind (``timing.actuator``): its registered drive
+    law's defaults, never the parameters the plan recorded (a plan only asks; a plan computed
+    with other parameters is refused by :func:`preflight`, its nominal voltage being off)."""
+    kind = plan.drive.kind
+    if kind == ERM_RATING.law.kind:
+        return ERM_RATING
+    law = drive_law(kind)
+    module = type(law).__module__
+    return ActuatorRating(f"{law.title} ({module} defaults)", law,
+                          f"{module}.DEFAULTS (their sources and which are estimates there)")
 
 
 def _erm_rating() -> ActuatorRating:
     m = SpeedLaw()
     return ActuatorRating(
-        "coin ERM of the shipped models", m.rated_voltage_V, m.rated_frequency_hz,
-        m.start_voltage_V, m.max_voltage_V,
+        "coin ERM of the shipped models", m,
         "motorlaw.SpeedLaw (the one motor law; the defaults the models were trained with): "
         "3.3 V rated, 120 rev/s at 3.3 V (Guo et al. 2025 drive a Leader "
         "LCM0720A3463F at 3.3 V); 4.5 V maximum is the project's estimate for that motor "
@@ -132,9 +151,9 @@ def resolve_limits(frequency_hz: float, device: DeviceLimits | None = None,
     nominal = actuator.nominal_voltage_V(frequency_hz)
     if nominal > actuator.max_voltage_V:
         raise SafetyError("best_frequency_hz", f"plan best_frequency_hz = {frequency_hz:g}: "
-                          f"the actuator needs {nominal:.3g} V to spin at it, above its "
-                          f"{actuator.max_voltage_V:g} V maximum (at most "
-                          f"{actuator.max_frequency_hz:.0f} Hz; {actuator.source})",
+                          f"the actuator needs {nominal:.3g} V for it, above its "
+                          f"{actuator.max_voltage_V:g} V maximum ({actuator.law.reach_text()}; "
+                          f"{actuator.source})",
                           value=frequency_hz, limit=actuator.max_frequency_hz,
                           owner="actuator")
     values["max_level"] = min(actuator.level_limit(frequency_hz), MAX_WIRE_LEVEL)
@@ -180,11 +199,12 @@ def _step_of(schedule: Schedule, t_ms: int) -> int:
 
 
 def preflight(plan: PlanFile, schedule: Schedule, resolved: Resolved,
-              actuator: ActuatorRating = ERM_RATING) -> None:
+              actuator: ActuatorRating | None = None) -> None:
     """Refuse (SafetyError naming the plan field or pattern step, the value and the limit)
     anything the plan or the schedule asks beyond the limits, and a plan whose timing was
     computed for another actuator (its nominal voltage off the actuator's speed law); nothing
     has been sent."""
+    actuator = actuator if actuator is not None else rating_of(plan)
     nominal = plan.data.get("timing", {}).get("nominal_voltage_V")
     want = actuator.nominal_voltage_V(plan.frequency_hz)
     if nominal is not None and abs(nominal / want - 1) > NOMINAL_TOLERANCE:

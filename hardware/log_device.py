@@ -57,7 +57,8 @@ class LogDevice(Device):
     def _play(self, schedule: Schedule, segments: list[Segment]) -> None:
         steps = [{"start_ms": s.start_ms, "duration_ms": s.duration_ms, "levels": _r(s.levels),
                   "rendered_um": _r(s.rendered_um)} for s in schedule.steps]
-        self._write("play", frequency_hz=schedule.frequency_hz, total_ms=schedule.total_ms,
+        self._write("play", frequency_hz=schedule.frequency_hz, carrier_hz=schedule.carrier_hz,
+                    total_ms=schedule.total_ms,
                     timing=schedule.timing, steps=steps,
                     segments=[[s.t_ms, s.duration_ms, s.channel, round(s.level, 6)]
                               for s in segments])

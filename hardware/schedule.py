@@ -13,6 +13,14 @@ a brake pulse of reverse drive at the same ratio for ``brake_ms``. Two stimuli o
 ``brake_ms``) from the end of one to the start of the next (the shortest inter-stimulus
 interval at which the residual vibration has died out); a shorter interval is an error naming
 the step.
+
+The actuator is asked, never assumed: the plan's ``timing.actuator`` and ``timing.drive_law``
+(absent in plans made before they were recorded: the coin ERM with its default law) give its
+drive law (:func:`motorlaw.drive_law`), which says whether an overdrive kick and a reverse-drive
+brake exist, and whether the device drives a carrier at the plan's frequency (an LRA, driven at
+its resonance when the plan's frequency is it) or a DC level whose size sets the speed (the
+ERM: no carrier). Whether the law reaches the plan's frequency within its voltage limit is
+checked with the other limits (:func:`hardware.limits.resolve_limits`).
 """
 
 from __future__ import annotations
@@ -30,6 +38,7 @@ from fieldspec import FieldError
 from fieldspec.documents import read_json_file
 from hardware.pattern import Pattern, PatternError
 from hardware.protocol import Segment
+from motorlaw import DriveLaw, SpeedLaw, drive_law
 from planner.drive import drive_levels, rendered
 from planner.paths import resolve_plan_models
 from planner.plan_record import PlanCheck, PlanRecord, PlanRecordError
@@ -60,6 +69,22 @@ class PlanFile:
     @property
     def n_sites(self) -> int:
         return len(self.crosstalk_um)
+
+    @property
+    def drive(self) -> DriveLaw:
+        """The actuator's drive law from ``timing.actuator`` and ``timing.drive_law`` (a plan
+        without them: the coin ERM's default law); PlanFileError naming the key."""
+        t = self.data.get("timing") or {}
+        kind = t.get("actuator", SpeedLaw.kind)
+        params = t.get("drive_law") or {}
+        if not isinstance(kind, str) or not isinstance(params, dict):
+            raise PlanFileError("timing.actuator", "plan.timing.actuator must be a name and "
+                                "timing.drive_law an object; re-plan")
+        try:
+            return drive_law(kind, params)
+        except (TypeError, ValueError) as err:
+            raise PlanFileError("timing.drive_law" if "drive law" not in str(err)
+                                else "timing.actuator", f"plan.timing: {err}; re-plan") from None
 
 
 def plan_from_dict(d: Any, schema: dict[str, Any] | None = None) -> PlanFile:
@@ -146,6 +171,7 @@ class Schedule:
     timing: dict[str, float]
     steps: tuple[StepDrive, ...]
     segments: tuple[Segment, ...]
+    carrier_hz: float | None = None  # the AC drive frequency (an LRA), None: a DC level (ERM)
 
     @property
     def total_ms(self) -> int:
@@ -176,14 +202,17 @@ def _targets(pattern: Pattern, plan: PlanFile) -> NDArray:
 
 
 def build_schedule(pattern: Pattern, plan: PlanFile) -> Schedule:
-    """Levels for every step and the timed segments (overdrive, steady, brake)."""
+    """Levels for every step and the timed segments (overdrive and brake where the actuator's
+    drive law has them, steady)."""
     t = plan.timing
-    od_ms, brake_ms = round(t["overdrive_ms"]), round(t["brake_ms"])
+    law = plan.drive  # its reach at the plan's frequency: hardware.limits.resolve_limits
+    od_ms = round(t["overdrive_ms"]) if law.overdrive else 0
+    brake_ms = round(t["brake_ms"]) if law.brake else 0
     ratio = t["overdrive_level"]
     steps: list[StepDrive] = []
     segs: list[Segment] = []
     start = 0.0
-    min_gap = max(t["min_isi_ms"], t["brake_ms"])
+    min_gap = max(t["min_isi_ms"], t["brake_ms"] if law.brake else 0.0)
     last_end = np.full(plan.n_sites, -np.inf)  # end of each channel's last stimulus [ms]
     last_step = np.zeros(plan.n_sites, dtype=int)
     for k, (step, target) in enumerate(zip(pattern.steps, _targets(pattern, plan), strict=True)):
@@ -216,4 +245,5 @@ def build_schedule(pattern: Pattern, plan: PlanFile) -> Schedule:
     if not math.isfinite(start):
         raise PatternError("step", "the pattern's total duration is not finite")
     segs.sort(key=lambda s: (s.t_ms, s.channel))
-    return Schedule(plan.n_sites, plan.frequency_hz, dict(t), tuple(steps), tuple(segs))
+    return Schedule(plan.n_sites, plan.frequency_hz, dict(t), tuple(steps), tuple(segs),
+                    plan.frequency_hz if law.carrier else None)

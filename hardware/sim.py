@@ -34,6 +34,9 @@ from hardware.protocol import Segment, Status
 from hardware.safety import ExposureMeter, SafetyLimits
 from hardware.schedule import PlanFile, PlanFileError, Schedule
 from planner.crosstalk import UnitField, crosstalk_matrix
+from planner.timing import rom_response
+from surrogate.runtime import load_predictor
+from surrogate.runtime.rom import load_envelope_model
 
 __all__ = ["SimDevice", "envelopes", "field_maps", "model_envelopes", "unit_field"]
 
@@ -45,8 +48,6 @@ GIF_DPI = 60  # animation resolution (a 252 x 228 pixel GIF)
 
 def unit_field(plan: PlanFile) -> UnitField:
     """The chosen design's amplitude field from the plan's model (run-time predictor)."""
-    from surrogate.runtime import load_predictor
-
     d = plan.data
     cand = next((c for c in d["candidates"] if c["name"] == d["best"]
                  and c["frequency_hz"] == d["best_frequency_hz"]), None)
@@ -108,9 +109,6 @@ def model_envelopes(segments: list[Segment], n_channels: int, timing: dict[str, 
     design, path = timing.get("design"), timing.get("model")
     if not isinstance(design, dict) or not path:
         return None
-    from planner.timing import rom_response
-    from surrogate.runtime.rom import load_envelope_model
-
     model = load_envelope_model(path)
     respond = rom_response(model, design, extrapolate=True)
     limit = model.motor.max_voltage_V

@@ -41,6 +41,9 @@ from dataclasses import dataclass, fields
 from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
+
+from motorlaw.drive import DriveLaw, register
 
 TWO_PI = 2.0 * math.pi
 
@@ -66,9 +69,12 @@ class LawLike(Protocol):
     max_voltage_V: float
 
 
+@register
 @dataclass(frozen=True)
-class SpeedLaw:
-    """Parameters of the ERM speed law (defaults: :data:`DEFAULTS`).
+class SpeedLaw(DriveLaw):
+    """Parameters of the ERM speed law (defaults: :data:`DEFAULTS`); the drive law of the coin
+    ERM (actuator kind ``"unit"``): the voltage sets the speed, an overdrive kick shortens the
+    spin-up, a reverse-voltage brake stops the rotor.
 
     Attributes:
         rated_voltage_V: drive voltage at which the motor spins at ``rated_frequency_hz``, V.
@@ -86,8 +92,39 @@ class SpeedLaw:
     tau_spindown_s: float = DEFAULTS["tau_spindown_s"]
     max_voltage_V: float = DEFAULTS["max_voltage_V"]
 
+    kind = "unit"
+    title = "coin ERM"
+    noun = "motor"
+    overdrive = True
+    brake = True
+    carrier = False
+    state_unit = "rev/s"
+
     def __post_init__(self) -> None:
         check_law(self)
+
+    def nominal_voltage_V(self, frequency_hz: float) -> float:
+        """The voltage spinning the motor at ``frequency_hz``: :func:`voltage_for_frequency`."""
+        return voltage_for_frequency(self, frequency_hz)
+
+    def band_hz(self) -> tuple[float, float]:
+        """(0, the steady speed at ``max_voltage_V``) [Hz]: :func:`max_frequency_hz`."""
+        return 0.0, max_frequency_hz(self)
+
+    def describe(self) -> str:
+        per_hz = (self.rated_voltage_V - self.start_voltage_V) / self.rated_frequency_hz
+        return (f"speed law {self.start_voltage_V:g} V + {per_hz * 1e3:.3f} mV/Hz: "
+                f"{self.rated_frequency_hz:g} Hz at {self.rated_voltage_V:g} V")
+
+    def drive_state(self, t_s: NDArray, volts: NDArray, frequency_hz: float) -> NDArray:
+        """The spin speed [rev/s] (the frequency is set by the voltage, not by
+        ``frequency_hz``): :func:`held_speed_and_phase`."""
+        return held_speed_and_phase(self, t_s, volts)[0] / TWO_PI
+
+    def force_ratio(self, state: NDArray, frequency_hz: float) -> NDArray:
+        """The unbalance force m e omega^2 at the speed ``state`` [rev/s] over its value at
+        ``frequency_hz``."""
+        return (np.asarray(state, dtype=float) / float(frequency_hz)) ** 2
 
     @classmethod
     def of(cls, law: LawLike) -> SpeedLaw:

@@ -13,10 +13,12 @@ checked against it before anything is predicted (:func:`check_value`), naming th
   ``model.allow_extrapolation = true``; then it is an :class:`Extrapolation`, flagged on the
   candidates, the timing and in the plan's summary.
 
-Drive reach (:func:`drive_reach`): an ERM's speed is set by its voltage. Its steady-speed law
-(``motorlaw.SpeedLaw``: ``V = V_start + f (V_rated - V_start) / f_rated``,
+Drive reach (:func:`drive_reach`): the actuator's drive law (``motorlaw``) gives the nominal
+voltage at a frequency and the voltage limit. An ERM's speed is set by its voltage: its
+steady-speed law (``motorlaw.SpeedLaw``: ``V = V_start + f (V_rated - V_start) / f_rated``,
 120 rev/s at 3.3 V, stiction below 0.4 V) and its voltage limit (4.5 V) give the highest
-frequency it reaches (169.66 Hz for those numbers); a frequency above it is not a candidate.
+frequency it reaches (169.66 Hz for those numbers); an LRA reaches a band about its resonance
+(``motorlaw.ResonantDrive``). A frequency outside the reach is not a candidate.
 """
 
 from __future__ import annotations
@@ -173,18 +175,17 @@ def check_value(bound: Bound, value: Any, where: str,
                          tuple(models))
 
 
-def drive_reach(motor: Any, frequency_hz: float) -> dict[str, Any] | None:
-    """None when the ERM ``motor`` (``motorlaw.SpeedLaw``) spins at ``frequency_hz`` within its
-    voltage limit; else why not, with the numbers of its steady-speed law."""
-    per_hz = (motor.rated_voltage_V - motor.start_voltage_V) / motor.rated_frequency_hz
-    volts = motor.start_voltage_V + frequency_hz * per_hz
-    top = (motor.max_voltage_V - motor.start_voltage_V) / per_hz
-    if volts <= motor.max_voltage_V:
+def drive_reach(law: Any, frequency_hz: float) -> dict[str, Any] | None:
+    """None when the actuator's drive law ``law`` (``motorlaw.DriveLaw``: the ERM's
+    ``SpeedLaw``, an LRA's ``ResonantDrive``) reaches ``frequency_hz`` within its voltage
+    limit; else why not, with the law's numbers."""
+    volts = law.nominal_voltage_V(frequency_hz)
+    if volts <= law.max_voltage_V:
         return None
+    top = law.band_hz()[1]
     return {"frequency_hz": frequency_hz, "needs_V": round(volts, 4),
-            "limit_V": motor.max_voltage_V, "max_frequency_hz": math.floor(top * 100) / 100,
-            "reason": f"{frequency_hz:g} Hz needs {volts:.3f} V, above the motor's "
-                      f"{motor.max_voltage_V:g} V limit (speed law {motor.start_voltage_V:g} V "
-                      f"+ {per_hz * 1e3:.3f} mV/Hz: {motor.rated_frequency_hz:g} Hz at "
-                      f"{motor.rated_voltage_V:g} V; at most {math.floor(top * 100) / 100:g} "
-                      "Hz)"}
+            "limit_V": law.max_voltage_V,
+            "max_frequency_hz": math.floor(top * 100) / 100 if math.isfinite(top) else None,
+            "reason": f"{frequency_hz:g} Hz needs {volts:.3f} V, above the {law.noun}'s "
+                      f"{law.max_voltage_V:g} V limit ({law.describe()}; "
+                      f"{law.reach_text()})"}

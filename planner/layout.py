@@ -36,7 +36,9 @@ crosstalk. A TOML file validated by the project's field-spec engine, like scenes
                                     # curve is for another site (the default: volar forearm)
 
     [timing]                        # the envelope timing of the chosen unit (planner.timing)
-    model = "models/rom-default"    # the transient ROM; enabled = false skips the timing
+    model = "models/rom-default"    # the transient ROM; enabled = false skips the timing;
+                                    # "": the actuator's drive law alone (tissue quasi-static)
+    actuator = "unit"               # whose drive law (motorlaw.DRIVES): "unit" (coin ERM), "lra"
     tau_spinup_ms = 20.0            # motor time constants (fem.motor estimates)
     tau_spindown_ms = 35.0
     isi_fraction = 0.1              # ratio criterion: residual below this of steady for the ISI
@@ -74,6 +76,7 @@ from fieldspec import (
 )
 from fieldspec.toml import read_toml_file
 from motorlaw import DEFAULTS as MOTOR_LAW
+from motorlaw import DRIVES, SpeedLaw
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
@@ -131,7 +134,8 @@ class TimingSpec:
     """Envelope timing request (see :mod:`planner.timing`); times in ms as in the file."""
 
     enabled: bool = True
-    model: str = "models/rom-default"
+    model: str = "models/rom-default"  # "": no envelope model, the drive law's own envelope
+    actuator: str = SpeedLaw.kind  # the actuator's drive law (motorlaw.DRIVES): the coin ERM
     tau_spinup_ms: float = 1e3 * MOTOR_LAW["tau_spinup_s"]
     tau_spindown_ms: float = 1e3 * MOTOR_LAW["tau_spindown_s"]
     isi_fraction: float = 0.1
@@ -211,6 +215,7 @@ _CRITERION = {"kind": Spec(str, "ratio", choices=KINDS),
 # isi_fraction 0.1: the 10 % level that also ends the 90-10 % decay time
 _TIMING = {"enabled": Spec(bool, True),
            "model": Spec(str, "models/rom-default"),
+           "actuator": Spec(str, TimingSpec.actuator, choices=tuple(DRIVES)),
            "tau_spinup_ms": Spec(float, TimingSpec.tau_spinup_ms, "(0, 1000]"),
            "tau_spindown_ms": Spec(float, TimingSpec.tau_spindown_ms, "(0, 1000]"),
            "isi_fraction": Spec(float, 0.1, "(0, 1)")}

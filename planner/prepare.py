@@ -18,12 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from motorlaw import SpeedLaw
+from motorlaw import SpeedLaw, drive_law
 from planner.candidates import expand_any
 from planner.domain import Domain, Extrapolation, build_domain, check_value, drive_reach
 from planner.layout import LayoutError, LayoutRequest, short_repr
 from surrogate.runtime import load_predictor
 from surrogate.runtime.encoding import PredictorInputError
+from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
 
 __all__ = ["Prepared", "prepare"]
 
@@ -35,7 +36,7 @@ class Prepared:
 
     predictor: Any
     rom: Any  # surrogate.runtime.rom.EnvelopeModel or None (timing disabled)
-    motor: Any  # the ERM's speed law (the envelope model's, else motorlaw's defaults)
+    motor: Any  # the actuator's drive law (the envelope model's, else motorlaw's defaults)
     domain: Domain
     combos: list[tuple[dict[str, Any], float]]
     out: dict[str, np.ndarray]
@@ -45,14 +46,34 @@ class Prepared:
 
 
 def _load_rom(req: LayoutRequest) -> Any:
-    from surrogate.runtime.rom import RomBlowUpError, load_envelope_model
-
+    """The envelope model of ``timing.model`` ("": none, the drive law's own envelope),
+    trained for ``timing.actuator``."""
+    if not req.timing.model:
+        return None
     try:
-        return load_envelope_model(req.timing.model)
+        rom = load_envelope_model(req.timing.model)
     except (OSError, ValueError, KeyError, RomBlowUpError) as err:
         raise LayoutError("timing.model", f"timing.model = {short_repr(req.timing.model)}: "
                           f"{err} (set timing.enabled = false to plan without timing; play "
                           "needs it)") from None
+    try:
+        rom.check_actuator(req.timing.actuator)
+    except RomInputError as err:
+        raise LayoutError("timing.actuator", f"timing.actuator = {req.timing.actuator!r}: "
+                          f"{req.timing.model} {str(err).split(': ', 2)[-1]} (timing.model = "
+                          '"" times it by its drive law alone)') from None
+    return rom
+
+
+def _check_actuator(req: LayoutRequest, predictor: Any) -> None:
+    """The harmonic model's amplitudes are those of the actuator it was trained for (its
+    card's ``actuator``; a card without one: the coin ERM); another one is refused."""
+    trained = str(predictor.card.get("actuator", SpeedLaw.kind))
+    if req.timing.actuator != trained:
+        raise LayoutError("timing.actuator", f"timing.actuator = {req.timing.actuator!r}: the "
+                          f"model {req.model} predicts the amplitudes of the actuator "
+                          f"{trained!r} ({drive_law(trained).title}); a plan for another "
+                          "actuator needs a harmonic model trained on it")
 
 
 def _unknown(where: str, key: str, req: LayoutRequest, names: tuple[str, ...]) -> LayoutError:
@@ -95,8 +116,8 @@ def _frequencies(req: LayoutRequest, domain: Domain, motor: Any
                         req.allow_extrapolation)
         kept.append((f, [x] if x else []))
     if not kept:
-        raise LayoutError("drive.frequencies_hz", "drive.frequencies_hz: the motor reaches "
-                          f"none of them: {dropped[0]['reason']}")
+        raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: the {motor.noun} "
+                          f"reaches none of them: {dropped[0]['reason']}")
     return kept, dropped
 
 
@@ -138,8 +159,9 @@ def prepare(req: LayoutRequest) -> Prepared:
         predictor = load_predictor(req.model)
     except (OSError, ValueError) as err:  # ModelFileError: missing, malformed, altered
         raise LayoutError("model.path", f"model.path = {short_repr(req.model)}: {err}") from None
+    _check_actuator(req, predictor)
     rom = _load_rom(req) if req.timing.enabled else None
-    motor = rom.motor if rom is not None else SpeedLaw()
+    motor = rom.motor if rom is not None else drive_law(req.timing.actuator)
     domain = build_domain(predictor, req.model, rom, req.timing.model if rom else None)
     names = predictor.input_names
     shared = _site(req, domain, names) + (_timing(req, domain) if rom is not None else [])

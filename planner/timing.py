@@ -20,9 +20,16 @@ speed)`` of the same shape (the tests use a first-order system with a known time
   fraction (ratio criterion, default 0.1).
 
 Times are found on a uniform grid of ``dt_s`` (linear interpolation between samples).
-The drive voltage that spins the ERM at the plan's frequency is the inverse of its
-steady-speed law (:mod:`motorlaw`: 120 rev/s at 3.3 V, stiction below 0.4 V, at most
-4.5 V); a frequency that needs more than the limit has no timing (:class:`TimingError`).
+The actuator's drive law (:mod:`motorlaw`, looked up by the layout's ``timing.actuator``)
+gives the nominal voltage at the plan's frequency (the coin ERM's: the inverse of its
+steady-speed law, 120 rev/s at 3.3 V, stiction below 0.4 V, at most 4.5 V; the LRA's: the
+voltage of its rated force there), its voltage limit and its drive state (the ERM's speed,
+the LRA's force envelope); a frequency that needs more than the limit has no timing
+(:class:`TimingError`). With the envelope model (``timing.model``) the envelope is the
+model's, which refuses an actuator it was not trained for; with ``timing.model = ""`` it is
+the drive law's own envelope times the plan's steady amplitude (:func:`law_response`: the
+tissue taken as quasi-static, its own mode not modelled), which is how an LRA is timed: rise
+and decay from its ring-up time constant Q / (pi f0), the brake from reverse-phase drive.
 """
 
 from __future__ import annotations
@@ -35,9 +42,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motorlaw
+from fieldspec import FieldError
+from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
 
-__all__ = ["TIMING_KEYS", "Timing", "TimingError", "envelope_timing", "plan_timing",
-           "rom_response", "voltage_for_frequency"]
+__all__ = ["TIMING_KEYS", "Timing", "TimingError", "envelope_timing", "law_response",
+           "plan_timing", "rom_response", "voltage_for_frequency"]
 
 TIMING_KEYS = ("rise_ms", "decay_ms", "overdrive_ms", "overdrive_level", "brake_ms",
                "min_isi_ms")
@@ -46,12 +55,11 @@ Response = Callable[[NDArray, NDArray], tuple[NDArray, NDArray]]
 SETTLE_BAND = 0.1  # settle_ms: the envelope stays within 10 % of steady
 
 
-class TimingError(ValueError):
+class TimingError(FieldError):
     """The timing cannot be computed (``field`` names the input)."""
 
     def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"{field}: {message}")
-        self.field = field
+        super().__init__(field, f"{field}: {message}")
 
 
 @dataclass(frozen=True)
@@ -78,16 +86,14 @@ class Timing:
         return {k: round(float(v), 4) for k, v in asdict(self).items()}
 
 
-def voltage_for_frequency(motor: Any, frequency_hz: float) -> float:
-    """Steady drive voltage [V] spinning the ERM (a :class:`motorlaw.SpeedLaw`) at
-    ``frequency_hz``: the inverse of the one speed law (:func:`motorlaw.voltage_for_frequency`),
-    refused above the motor's voltage limit."""
-    v = motorlaw.voltage_for_frequency(motor, frequency_hz)
-    if v > motor.max_voltage_V:
-        top = motorlaw.max_frequency_hz(motor)
+def voltage_for_frequency(law: motorlaw.DriveLaw, frequency_hz: float) -> float:
+    """Nominal drive voltage [V] of the actuator's drive law at ``frequency_hz`` (the ERM's
+    :class:`motorlaw.SpeedLaw`: the inverse of the one speed law), refused outside the
+    frequencies the law reaches within its voltage limit."""
+    v = law.nominal_voltage_V(frequency_hz)
+    if v > law.max_voltage_V:
         raise TimingError("frequency_hz", f"{frequency_hz:g} Hz needs {v:.3f} V, above the "
-                          f"motor's {motor.max_voltage_V:g} V limit (at most "
-                          f"{np.floor(top * 100) / 100:g} Hz)")
+                          f"{law.noun}'s {law.max_voltage_V:g} V limit ({law.reach_text()})")
     return v
 
 
@@ -191,6 +197,18 @@ def rom_response(model: Any, design: Mapping[str, Any], *, extrapolate: bool = F
     return respond
 
 
+def law_response(law: motorlaw.DriveLaw, frequency_hz: float, steady_um: float) -> Response:
+    """``respond`` of the drive law alone at ``frequency_hz``: the envelope [um] is the
+    steady amplitude ``steady_um`` times the law's force relative to its nominal force (the
+    tissue quasi-static, the response's frequency dependence left out), the drive state as
+    the "speed"."""
+    def respond(t_s: NDArray, volts: NDArray) -> tuple[NDArray, NDArray]:
+        state = law.drive_state(t_s, volts, frequency_hz)
+        return steady_um * law.force_ratio(state, frequency_hz), state
+
+    return respond
+
+
 def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
                 model: Any = None) -> dict[str, Any]:
     """The ``timing`` object of a plan: :class:`Timing` of the chosen unit (``best``, a
@@ -202,10 +220,12 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
     above that reach, a design outside the model), every key is null and ``unavailable``
     says why, with the number. ``model``: the loaded model (else loaded from the
     request). ``extrapolated`` lists the model's inputs outside its trained range
-    (``model.allow_extrapolation``)."""
-    from surrogate.runtime.rom import RomBlowUpError, RomInputError, load_envelope_model
-
+    (``model.allow_extrapolation``). ``timing.actuator`` names the actuator; its drive law is
+    the envelope model's (which refuses another actuator), or with ``timing.model = ""`` the
+    registered law's defaults (:func:`law_response`); ``actuator`` and ``drive_law`` (its
+    parameters) are recorded for the schedule."""
     spec = request.timing
+    actuator = getattr(spec, "actuator", motorlaw.SpeedLaw.kind)  # a spec without: the ERM
     crit = request.criterion
     if crit.kind == "perceptual":
         fraction = float(crit.threshold(best.frequency_hz)) / (best.center_um * crit.drive_level)
@@ -213,9 +233,15 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
     else:
         fraction, basis = spec.isi_fraction, "timing.isi_fraction"
     extra = {"model": spec.model, "isi_level_basis": basis,
-             "tau_spinup_ms": spec.tau_spinup_ms, "tau_spindown_ms": spec.tau_spindown_ms}
+             "tau_spinup_ms": spec.tau_spinup_ms, "tau_spindown_ms": spec.tau_spindown_ms,
+             "actuator": actuator}
     try:
+        if not spec.model and model is None:
+            taus = {"tau_spinup_s": 1e-3 * spec.tau_spinup_ms,
+                    "tau_spindown_s": 1e-3 * spec.tau_spindown_ms}
+            return {**_law_timing(actuator, taus, best, fraction, dt_s), **extra}
         model = model if model is not None else load_envelope_model(spec.model)
+        model.check_actuator(actuator)
         inputs = {**request.site, **best.inputs, "tau_spinup_ms": spec.tau_spinup_ms,
                   "tau_spindown_ms": spec.tau_spindown_ms}
         design = {k: inputs[k] for k in model.input_names if k in inputs}
@@ -227,7 +253,8 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
                          and not ranges[k][0] <= float(v) <= ranges[k][1])
         extra["extrapolated"] = outside
         extra["design"] = design
-        extra["max_frequency_hz"] = round(motorlaw.max_frequency_hz(model.motor), 4)
+        extra["max_frequency_hz"] = round(model.motor.band_hz()[1], 4)
+        extra["drive_law"] = model.motor.params()
         nominal = voltage_for_frequency(model.motor, best.frequency_hz)
         timing = envelope_timing(rom_response(model, design,
                                               extrapolate=request.allow_extrapolation),
@@ -236,3 +263,21 @@ def plan_timing(request: Any, best: Any, *, dt_s: float = 5e-4,
     except (TimingError, RomInputError, RomBlowUpError, OSError, ValueError) as err:
         return {**dict.fromkeys(TIMING_KEYS), **extra, "unavailable": str(err)}
     return {**timing.to_dict(), **extra}
+
+
+def _law_timing(kind: str, taus: dict[str, float], best: Any, fraction: float,
+                dt_s: float) -> dict[str, Any]:
+    """The timing of the actuator ``kind``'s drive law alone (its defaults, and the request's
+    time constants ``taus`` where the law has such parameters: the ERM's), at the plan's
+    frequency and steady amplitude (:func:`law_response`)."""
+    try:
+        cls = motorlaw.drive_law_class(kind)
+        law = cls.from_params({k: v for k, v in taus.items() if k in cls().params()})
+    except ValueError as err:
+        raise TimingError("actuator", str(err)) from None
+    lo, hi = law.band_hz()
+    nominal = voltage_for_frequency(law, best.frequency_hz)
+    timing = envelope_timing(law_response(law, best.frequency_hz, best.center_um), nominal,
+                             law.max_voltage_V, min(fraction, 0.99), dt_s=dt_s)
+    return {**timing.to_dict(), "drive_law": law.params(), "min_frequency_hz": round(lo, 4),
+            "max_frequency_hz": round(hi, 4) if np.isfinite(hi) else None}

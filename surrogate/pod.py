@@ -6,15 +6,20 @@ profile spans two decades from the edge outwards; in logs its shape varies smoot
 handful of modes hold nearly all the variance). Every output is then a *linear* function of
 those targets, given by :meth:`ProfileTargets.output_map`::
 
-    log_outputs = targets @ B + b,   columns  [center, edge, normalized_edge, profile...]
+    log_outputs = targets @ B + b,   columns  [center, edge, normalized_edge, profile...,
+                                              extra profile blocks...]
 
 with edge = the profile at distance 0 from the unit's edge and normalized_edge = edge /
-center, each defined once here. Because the map is linear it goes into the exported graphs,
-and a model's predictive variance propagates through it exactly.
+center, each defined once here. A model may learn further profiles on the same grid (e.g.
+``profile_normal_um``, the normal component an LDV sees): each is one more block of POD
+coefficients among the targets and one more block of columns ``NAME[j]`` among the outputs.
+Because the map is linear it goes into the exported graphs, and a model's predictive variance
+propagates through it exactly.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -24,10 +29,11 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 __all__ = ["POD", "ProfileTargets", "output_columns"]
 
 
-def output_columns(m: int) -> list[str]:
-    """Names of the log-output columns for a profile of ``m`` points."""
+def output_columns(m: int, extra: Sequence[str] = ()) -> list[str]:
+    """Names of the log-output columns for profiles of ``m`` points: the magnitude outputs,
+    then one block ``NAME[j]`` per extra profile output ``NAME``."""
     return ["center_amplitude_um", "edge_amplitude_um", "normalized_edge"] + \
-        [f"profile_um[{j}]" for j in range(m)]
+        [f"{name}[{j}]" for name in ("profile_um", *extra) for j in range(m)]
 
 
 class POD(TransformerMixin, BaseEstimator):
@@ -71,29 +77,57 @@ class POD(TransformerMixin, BaseEstimator):
 
 
 class ProfileTargets:
-    """Targets [log center, POD coefficients of log profile] and their linear output map."""
+    """Targets [log center, POD coefficients of the log profile, POD coefficients of each
+    extra log profile] and their linear output map.
 
-    def __init__(self, n_modes: int | None = None, energy: float = 0.9999) -> None:
+    ``extra``: names of further profile outputs (their columns in :func:`output_columns`);
+    each gets its own POD (``n_modes`` when given, else the fewest modes holding ``energy``).
+    """
+
+    def __init__(self, n_modes: int | None = None, energy: float = 0.9999,
+                 extra: Sequence[str] = ()) -> None:
         self.pod = POD(n_modes=n_modes, energy=energy)
+        self.extra = tuple(extra)
+        self.extra_pods = [POD(n_modes=n_modes, energy=energy) for _ in self.extra]
 
-    def fit_transform(self, center_um: np.ndarray, profile_um: np.ndarray) -> np.ndarray:
-        """Fit the POD on the log profiles; return the (n, 1 + k) target matrix."""
+    @property
+    def pods(self) -> dict[str, POD]:
+        """The POD of every profile output by name (``profile_um`` first)."""
+        return dict(zip(("profile_um", *self.extra), (self.pod, *self.extra_pods),
+                        strict=True))
+
+    def fit_transform(self, center_um: np.ndarray, profile_um: np.ndarray,
+                      extra_um: Sequence[np.ndarray] = ()) -> np.ndarray:
+        """Fit the PODs on the log profiles; return the (n, 1 + k + sum k_extra) targets.
+        ``extra_um``: one (n, m) array per extra profile, in the order of ``extra``."""
+        if len(extra_um) != len(self.extra):
+            raise ValueError(f"{len(extra_um)} extra profiles given for {list(self.extra)}")
         _check_positive(center_um, "center_amplitude_um")
         _check_positive(profile_um, "profile_um")
-        coeffs = self.pod.fit_transform(np.log(profile_um))
-        return np.column_stack([np.log(center_um), coeffs])
+        blocks = [np.log(center_um)[:, None], self.pod.fit_transform(np.log(profile_um))]
+        for name, pod, values in zip(self.extra, self.extra_pods, extra_um, strict=True):
+            _check_positive(values, name)
+            blocks.append(pod.fit_transform(np.log(values)))
+        return np.column_stack(blocks)
 
     def output_map(self) -> tuple[np.ndarray, np.ndarray]:
-        """(B (1 + k, 3 + m), b (3 + m,)) with log_outputs = targets @ B + b."""
+        """(B (1 + k + sum k_extra, 3 + m (1 + n_extra)), b) with log_outputs = targets @ B + b;
+        each extra block maps only its own coefficients to its own columns."""
         modes, mean = self.pod.modes_, self.pod.mean_
         k, m = modes.shape
-        B = np.zeros((1 + k, 3 + m))
-        b = np.zeros(3 + m)
+        rows = 1 + k + sum(p.modes_.shape[0] for p in self.extra_pods)
+        B = np.zeros((rows, 3 + m * (1 + len(self.extra))))
+        b = np.zeros(B.shape[1])
         B[0, 0] = 1.0                       # center
-        B[1:, 1], b[1] = modes[:, 0], mean[0]  # edge = profile at distance 0
+        B[1:1 + k, 1], b[1] = modes[:, 0], mean[0]  # edge = profile at distance 0
         B[0, 2] = -1.0                      # normalized = edge / center
-        B[1:, 2], b[2] = modes[:, 0], mean[0]
-        B[1:, 3:], b[3:] = modes, mean      # profile
+        B[1:1 + k, 2], b[2] = modes[:, 0], mean[0]
+        B[1:1 + k, 3:3 + m], b[3:3 + m] = modes, mean      # profile
+        r, c = 1 + k, 3 + m
+        for pod in self.extra_pods:          # extra profiles, block by block
+            kj = pod.modes_.shape[0]
+            B[r:r + kj, c:c + m], b[c:c + m] = pod.modes_, pod.mean_
+            r, c = r + kj, c + m
         return B, b
 
 

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 import motorlaw
 from surrogate import rom_card
+from surrogate.data.store import Store
 from surrogate.registry import check_model_out, write_model
 from surrogate.rom_card import (
     COEFFICIENTS_FILE,
@@ -114,6 +115,11 @@ def schedule_volts(t: NDArray, schedule_ms: Sequence[Sequence[float]]) -> NDArra
 def run_from_row(row: Mapping[str, Any], design_names: Sequence[str]) -> tuple[Run, dict]:
     """A :class:`Run` and the motor law's fixed parameters of one dataset row."""
     scene = json.loads(row["scene_json"])
+    kind = scene.get("load", {}).get("kind")
+    if kind != motorlaw.SpeedLaw.kind:  # the model's form follows the ERM's speed law
+        raise ValueError(f"--data: sample {row.get('sample_index')} drives load.kind = "
+                         f"{kind!r}; the envelope model is fitted on {motorlaw.SpeedLaw.title} "
+                         f"transients (load.kind = {motorlaw.SpeedLaw.kind!r})")
     m = scene["unit"]["motor"]
     schedule = scene["analysis"]["voltage_schedule"]
     law = motorlaw.SpeedLaw(
@@ -143,8 +149,6 @@ def load_runs(paths: Sequence[str | Path], design_names: Sequence[str]
               ) -> tuple[list[Run], dict[str, float], list[str]]:
     """Successful transient runs of the datasets, the common fixed motor parameters and the
     sha256 of each manifest. Raises ValueError (naming --data) for a dataset without them."""
-    from surrogate.data.store import Store
-
     runs: list[Run] = []
     fixed: dict[str, float] | None = None
     hashes = []
@@ -335,7 +339,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     motor_ranges = {k: [min(r.design[k] for r in train_runs),
                         max(r.design[k] for r in train_runs)] for k in MOTOR_INPUTS}
     max_v = max(float(np.max(np.abs(r.volts))) for r in runs)
-    provisional = {"format": FORMAT, "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
+    provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind,
+                   "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
                    "motor": {**fixed, "max_voltage_V": max(max_v,
                                                            motorlaw.DEFAULTS["max_voltage_V"])},
                    "motor_ranges": motor_ranges,

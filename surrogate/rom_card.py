@@ -43,6 +43,7 @@ def card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[A
                         else {"range": list(rng)})
     return {
         "kind": "rom",
+        "actuator": model.actuator,
         "predicts": {"center_envelope_um": "vibration envelope at the unit's center "
                      "(skin-side face on the axis), um",
                      "edge_envelope_um": "skin-surface vibration envelope at the unit's "

@@ -414,14 +414,22 @@ export class HapticModel {
 export function decode(card, logMean, logStd, n, extra = {}) {
   const cols = card.log_output_columns;
   const K = cols.length;
+  // calibrated intervals (docs/embedding.md, section 6): log_std column k times its factor
+  const scale = card.interval_calibration?.log_std_scale ?? null;
+  if (scale !== null && (!Array.isArray(scale) || scale.length !== K ||
+      !scale.every((f) => Number.isFinite(f) && f > 0))) {
+    throw new ModelFileError("interval_calibration", `interval_calibration.log_std_scale must ` +
+      `be ${K} positive factors, one per log output column (check: card values)`);
+  }
+  const sd = scale === null ? (i, k) => logStd[i * K + k] : (i, k) => logStd[i * K + k] * scale[k];
   const out = {};
   cols.forEach((col, k) => {
     const m = /^(.+)\[(\d+)\]$/.exec(col);
     const name = m ? m[1] : col;
     for (const [key, fn] of [[name, (i) => Math.exp(logMean[i * K + k])],
-      [`${name}_log_std`, (i) => logStd[i * K + k]],
-      [`${name}_low95`, (i) => Math.exp(logMean[i * K + k] - Z95 * logStd[i * K + k])],
-      [`${name}_high95`, (i) => Math.exp(logMean[i * K + k] + Z95 * logStd[i * K + k])]]) {
+      [`${name}_log_std`, (i) => sd(i, k)],
+      [`${name}_low95`, (i) => Math.exp(logMean[i * K + k] - Z95 * sd(i, k))],
+      [`${name}_high95`, (i) => Math.exp(logMean[i * K + k] + Z95 * sd(i, k))]]) {
       if (!m) { out[key] = Array.from({ length: n }, (_, i) => fn(i)); continue; }
       out[key] ??= Array.from({ length: n }, () => []);
       for (let i = 0; i < n; i++) out[key][i][Number(m[2])] = fn(i);

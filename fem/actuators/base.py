@@ -36,6 +36,8 @@ class Actuator:
         order: position among the kinds (scene schema choices are listed in this order).
         is_unit: a haptic unit sitting on the skin (needs a ``[unit]`` table).
         unit_part: the ``[unit.<part>]`` table it reads beyond motor, board and pogo, or None.
+        own_part: an optional ``[unit.<part>]`` table of its own (its drive law's parameters),
+            or None; absent from a scene, the drive law's defaults apply.
         load_fields: the ``[load]`` fields it reads (beyond ``kind`` and ``direction``).
         parallel_force: its force on a unit is parallel to the skin (the unit may rock).
         spins_up: a transient drives it through a spin-up (the ``spin_up`` effect).
@@ -47,6 +49,7 @@ class Actuator:
     order: ClassVar[int] = 100
     is_unit: ClassVar[bool] = False
     unit_part: ClassVar[str | None] = None
+    own_part: ClassVar[str | None] = None
     load_fields: ClassVar[tuple[str, ...]] = ()
     parallel_force: ClassVar[bool] = False
     spins_up: ClassVar[bool] = False
@@ -74,10 +77,11 @@ class Actuator:
         """The frequency [Hz] a transient runs at (mesh and absorbers are sized for it)."""
         return float(_get(scene, self.transient_frequency_field))
 
-    def load_scale(self, omega: NDArray, omega_ref: float) -> NDArray:
+    def load_scale(self, omega: NDArray, omega_ref: float,
+                   scene: Scene | None = None) -> NDArray:
         """Force at angular frequencies ``omega`` [rad/s] relative to the force of
-        :meth:`nodal_load` at ``omega_ref`` [rad/s] (a sweep scales its one load by it).
-        Default: a force that does not depend on frequency."""
+        :meth:`nodal_load` at ``omega_ref`` [rad/s] (a sweep scales its one load by it) for
+        ``scene``'s actuator. Default: a force that does not depend on frequency."""
         return np.ones_like(np.asarray(omega, dtype=float))
 
     def load_history(self, scene: Scene, problem: Problem) -> tuple[History, int]:

@@ -47,7 +47,8 @@ class CoinERM(Actuator):
         force = scene.unit.motor.force_N_at(scene.analysis.frequency_hz) if steady else 1.0
         return loads.axis_point_force(domain, 1, force, z=lay.rotor_z)
 
-    def load_scale(self, omega: NDArray, omega_ref: float) -> NDArray:
+    def load_scale(self, omega: NDArray, omega_ref: float,
+                   scene: Scene | None = None) -> NDArray:
         """The unbalance force m e omega^2 grows with the square of the speed."""
         return (np.asarray(omega, dtype=float) / omega_ref) ** 2
 

@@ -2,31 +2,23 @@
 on a spring driven by a voice coil at its resonance, pushing the housing along the skin
 normal (Fourier mode 0).
 
-Scene fields: a ``[unit]`` table as for any unit; ``unit.actuator.force_N`` [N] is the LRA's
-force amplitude on the housing *at its resonance* (the rated force). At another drive
-frequency f the same coil drive gives the force of a damped mass-spring resonator, the
-reaction of the moving mass on the housing:
+Its drive dynamics are its drive law, defined once in :mod:`motorlaw.lra`
+(:class:`motorlaw.lra.ResonantDrive`, which the run-time side uses too): the force at a drive
+frequency f is that of a damped mass-spring resonator,
 
-    F(f) = force_N * |G(f)| / Q,   G = r^2 / (1 - r^2 + i r / Q),   r = f / RESONANCE_HZ
+    F(f) = force_N * |G(f)| / Q,   G = r^2 / (1 - r^2 + i r / Q),   r = f / resonance_hz
 
-so F(RESONANCE_HZ) = force_N, and far above resonance F -> force_N / Q (the mass is driven
-as a free mass). Only the amplitude is applied; the phase of the force against the drive
-voltage is not modelled (the solver's displacements are relative to the force). A transient
-drives a sine at ``analysis.frequency_hz`` whose amplitude follows the voltage schedule (the
-resonator's own ring-up and braking are not modelled).
-
-Defaults for a common 10 mm coin LRA, from the headline figures of the datasheet families
-Precision Microdrives C10-100 (10 mm, 175 Hz rated frequency, about 1.4 g normalised
-amplitude on a 100 g test mass) and Vybronics VG1040003D (10 mm coin, resonance in the
-170-175 Hz band). These figures were not re-read from the datasheets in this tree: check them
-against the current datasheet before relying on them.
-
-- ``RESONANCE_HZ`` = 175 Hz: the families' rated frequency.
-- ``RATED_FORCE_N`` = 1.4 N: 1.4 g x 9.81 m/s2 on a 0.1 kg test mass (about 1.37 N), the
-  force-class of the family (the scene's ``unit.actuator.force_N`` is what the solver uses).
-- ``MOVING_MASS_KG`` = 1.5e-3 kg: an estimate (1-2 g for a 10 mm coin LRA's magnet mass).
-- ``QUALITY_FACTOR`` = 10: an estimate from the narrow (about +-10 Hz) band around resonance
-  in which these LRAs are specified to be driven.
+so F(resonance) = force_N, and far above resonance F -> force_N / Q (the mass is driven as a
+free mass). Scene fields: a ``[unit]`` table as for any unit; ``unit.actuator.force_N`` [N] is
+the force amplitude on the housing *at its resonance* (the rated force); the optional
+``[unit.lra]`` table gives the resonator (``resonance_hz``, ``quality_factor``,
+``moving_mass_g``, ``rated_voltage_V``, ``max_voltage_V``; absent: the law's defaults for a
+common 10 mm coin LRA, with their sources in :mod:`motorlaw.lra`). Only the amplitude is
+applied; the phase of the force against the drive voltage is not modelled (the solver's
+displacements are relative to the force). A transient drives a sine at
+``analysis.frequency_hz`` whose amplitude follows the voltage schedule (the resonator's own
+ring-up and braking, which the run-time side takes from the drive law, are not in the FE
+transient).
 """
 
 from __future__ import annotations
@@ -35,6 +27,9 @@ from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
+
+from motorlaw.lra import DEFAULTS as LAW
+from motorlaw.lra import ResonantDrive
 
 from .base import register
 from .normal import NormalActuator
@@ -50,23 +45,37 @@ class LRA(NormalActuator):
     kind = "lra"
     enum_name = "LRA"
     order = 4
+    own_part = "lra"
 
-    RESONANCE_HZ: ClassVar[float] = 175.0
-    RATED_FORCE_N: ClassVar[float] = 1.4
-    MOVING_MASS_KG: ClassVar[float] = 1.5e-3
-    QUALITY_FACTOR: ClassVar[float] = 10.0
+    # the drive law's defaults (motorlaw.lra.DEFAULTS, sources there)
+    RESONANCE_HZ: ClassVar[float] = LAW["resonance_hz"]
+    RATED_FORCE_N: ClassVar[float] = LAW["force_N"]
+    MOVING_MASS_KG: ClassVar[float] = LAW["moving_mass_kg"]
+    QUALITY_FACTOR: ClassVar[float] = LAW["quality_factor"]
 
-    def response(self, frequency_hz: NDArray | float) -> NDArray:
+    def law(self, scene: Scene | None = None) -> ResonantDrive:
+        """The drive law of ``scene``'s LRA: its ``[unit.lra]`` table, else the defaults."""
+        part = scene.unit.lra if scene is not None and scene.unit is not None else None
+        if part is None:
+            return ResonantDrive()
+        return ResonantDrive(resonance_hz=part.resonance_hz,
+                             quality_factor=part.quality_factor,
+                             moving_mass_kg=part.moving_mass_kg,
+                             rated_voltage_V=part.rated_voltage_V,
+                             max_voltage_V=part.max_voltage_V)
+
+    def response(self, frequency_hz: NDArray | float, scene: Scene | None = None) -> NDArray:
         """Force at ``frequency_hz`` [Hz] relative to the force at resonance [-] (1 there)."""
-        r = np.asarray(frequency_hz, dtype=float) / self.RESONANCE_HZ
-        q = self.QUALITY_FACTOR
-        return np.abs(r**2 / (1 - r**2 + 1j * r / q)) / q
+        return self.law(scene).response(frequency_hz)
 
     def force_N(self, scene: Scene) -> float:
         """Force amplitude [N] on the housing at ``analysis.frequency_hz``."""
-        return float(scene.unit.actuator.force_N * self.response(scene.analysis.frequency_hz))
+        return float(scene.unit.actuator.force_N
+                     * self.response(scene.analysis.frequency_hz, scene))
 
-    def load_scale(self, omega: NDArray, omega_ref: float) -> NDArray:
+    def load_scale(self, omega: NDArray, omega_ref: float,
+                   scene: Scene | None = None) -> NDArray:
         """The resonator's force at ``omega`` over its force at ``omega_ref`` [rad/s]."""
         to_hz = 1 / (2 * np.pi)
-        return self.response(np.asarray(omega) * to_hz) / self.response(omega_ref * to_hz)
+        law = self.law(scene)
+        return law.response(np.asarray(omega) * to_hz) / law.response(omega_ref * to_hz)

@@ -64,7 +64,7 @@ from .model import (
     Tissue,
 )
 from .tables import DEFAULT_FOREARM_LAYERS, MAX_LAYERS, MAX_RINGS
-from .unit_model import RING_GAP_MM, Actuator, Board, Motor, Pogo, Ring, Unit
+from .unit_model import RING_GAP_MM, Actuator, Board, LraPart, Motor, Pogo, Ring, Unit
 from .usage import effective_scene_dict, unused_fields
 
 __all__ = [
@@ -81,6 +81,7 @@ __all__ = [
     "Layer",
     "Load",
     "LoadKind",
+    "LraPart",
     "MeshSettings",
     "Motor",
     "Output",

@@ -6,7 +6,9 @@ force_at_hz)^2`` (converted to g mm); the force keys are input only and are not 
 A ring equal to its library material is written as the canonical name, any other ring as a
 full inline table. ``[effects]`` keeps only the keys set to true or false (None = auto) and is
 left out when all are auto; ``[unit]`` is left out when the scene has no unit, and
-``[unit.actuator]`` unless the load is a normal actuator (or the actuator is not the default).
+``[unit.actuator]`` unless the load is a normal actuator (or the actuator is not the default);
+an actuator's own optional table (``[unit.lra]``) only when it was given, so scenes without it
+keep their hashes.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from fieldspec import Context, Spec, is_bool
 from fieldspec.toml import dumps, read_toml_file
 
 from ..actuators import ACTUATORS
-from .model import Scene, SceneError
+from .model import SCENE_CHECKS, Scene, SceneError
 from .schedule import Schedule
 from .tables import LAYER, RING, SUBARRAYS, TABLES, UNIT, UNIT_KEYS, UNIT_PARTS
 from .unit_model import Ring, Unit
@@ -98,6 +100,8 @@ def _unit_to_dict(unit: Unit, load_kind: str) -> dict[str, Any]:
            "encapsulation": [_ring_to_toml(ring) for ring in unit.encapsulation]}
     for name, (cls, specs) in UNIT_PARTS.items():
         part = getattr(unit, name)
+        if part is None:  # an optional table not given (``[unit.lra]``): not written
+            continue
         # the actuator table only matters to the kinds that read it (elsewhere a non-default
         # one is written so that validation rejects it instead of dropping it)
         reader = ACTUATORS.get(str(load_kind))  # None: an unknown kind, validation reports it
@@ -141,3 +145,10 @@ def dump_scene_toml(scene: Scene) -> str:
     """Write ``scene`` as TOML text in the schema layout (all values explicit)."""
     return dumps(scene_to_dict(scene), SUBARRAYS,
                  "hapticrom scene (written by fem.scene.dump_scene_toml); units in key names")
+
+
+def _check_scene(scene: Scene) -> None:
+    validate(scene_to_dict(scene))
+
+
+SCENE_CHECKS.append(_check_scene)  # every Scene(...) is validated as its file would be

@@ -11,6 +11,7 @@ Constructing a :class:`Scene` validates it (see ``fem.scene.validate``).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -268,9 +269,15 @@ class Scene:
     effects: Effects = field(default_factory=Effects)
 
     def __post_init__(self) -> None:
-        from .io import scene_to_dict
-        from .validate import validate
+        if not SCENE_CHECKS:
+            raise RuntimeError("fem.scene.io registers the scene checks on import")
+        for check in SCENE_CHECKS:  # direct construction gets the same checks as a file
+            check(self)
 
-        validate(scene_to_dict(self))  # direct construction gets the same checks as a file
+
+SCENE_CHECKS: list[Callable[[Scene], None]] = []
+"""What a constructed :class:`Scene` is checked with: ``fem.scene.io`` (imported by the
+package before anything can build a scene) adds "validate its TOML-shaped dict", so this
+module imports neither the reader nor the validation (no import circle in ``fem/scene``)."""
 
 

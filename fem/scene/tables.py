@@ -10,6 +10,7 @@ import dataclasses
 from typing import Any
 
 from fieldspec import REQUIRED, Spec
+from motorlaw.lra import RANGES as LRA_RANGES
 
 from ..materials import get_material
 from .frequencies import Frequencies, read_frequencies
@@ -25,7 +26,7 @@ from .model import (
     Tissue,
 )
 from .schedule import Schedule, read_schedule
-from .unit_model import Actuator, Board, Motor, Pogo, Unit
+from .unit_model import Actuator, Board, LraPart, Motor, Pogo, Unit
 
 MAX_LAYERS = 50
 MAX_RINGS = 5
@@ -98,6 +99,16 @@ POGO = _from_model(Pogo, {
     "tip_diameter_mm": Spec(float, MODEL, "[0.001, 5]"),
 })
 ACTUATOR = _from_model(Actuator, {"force_N": Spec(float, MODEL, "[-1e3, 1e3]", nonzero=True)})
+# [unit.lra]: the ranges of the LRA's drive law (motorlaw.lra.RANGES), the mass in g
+LRA = _from_model(LraPart, {
+    "resonance_hz": Spec(float, MODEL, "[{:g}, {:g}]".format(*LRA_RANGES["resonance_hz"])),
+    "quality_factor": Spec(float, MODEL, "[{:g}, {:g}]".format(*LRA_RANGES["quality_factor"])),
+    "moving_mass_g": Spec(float, MODEL, "[{:g}, {:g}]".format(
+        *(1e3 * m for m in LRA_RANGES["moving_mass_kg"]))),
+    "rated_voltage_V": Spec(float, MODEL, "[{:g}, {:g}]".format(*LRA_RANGES["rated_voltage_V"])),
+    "max_voltage_V": Spec(float, MODEL, "[unit.lra.rated_voltage_V, {:g}]".format(
+        LRA_RANGES["max_voltage_V"][1])),
+})
 
 # [unit]: its own keys, the rings list, then its part tables (in this order when written).
 UNIT = _from_model(Unit, {
@@ -111,6 +122,7 @@ UNIT_PARTS: dict[str, tuple[type, dict[str, Spec]]] = {
     "board": (Board, BOARD),
     "pogo": (Pogo, POGO),
     "actuator": (Actuator, ACTUATOR),
+    "lra": (LraPart, LRA),  # optional: an actuator's own table (Actuator.own_part)
 }
 UNIT_KEYS = ["orientation", "attachment", "encapsulation", "ring_thickness_mm", "ring_contact",
              *UNIT_PARTS]

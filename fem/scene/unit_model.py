@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from motorlaw import DEFAULTS as MOTOR_LAW
+from motorlaw.lra import DEFAULTS as LRA_LAW
 
 from ..materials import Material
 from .si import Elastic, si_view
@@ -168,6 +169,29 @@ class Actuator:
 
 
 @dataclass(frozen=True)
+class LraPart:
+    """``[unit.lra]``: the LRA's resonator (``load.kind = "lra"`` only; optional: absent, the
+    defaults of :data:`motorlaw.lra.DEFAULTS` apply, with their sources there). Its force at
+    resonance is ``[unit.actuator] force_N``.
+
+    Attributes:
+        resonance_hz: resonance f0 [Hz].
+        quality_factor: Q of the moving mass on its spring [-].
+        moving_mass_g: the moving (magnet) mass [g].
+        rated_voltage_V: drive voltage of the rated force at resonance [V].
+        max_voltage_V: largest drive voltage (overdrive limit) [V].
+    """
+
+    resonance_hz: float = LRA_LAW["resonance_hz"]
+    quality_factor: float = LRA_LAW["quality_factor"]
+    moving_mass_g: float = 1e3 * LRA_LAW["moving_mass_kg"]
+    rated_voltage_V: float = LRA_LAW["rated_voltage_V"]
+    max_voltage_V: float = LRA_LAW["max_voltage_V"]
+
+    moving_mass_kg = si_view("moving_mass_g", 1e-3)
+
+
+@dataclass(frozen=True)
 class Unit:
     """The haptic unit on the skin, centered on the axis.
 
@@ -183,6 +207,7 @@ class Unit:
             meshes so that only what the contact passes is tied.
         motor, board, pogo, actuator: the parts (``pogo`` used only with attachment "pogo",
             ``actuator`` only with ``load.kind = "normal_actuator"`` or ``"lra"``).
+        lra: the LRA's resonator (``load.kind = "lra"`` only); None: not given (defaults).
     """
 
     orientation: str = "forward"
@@ -194,6 +219,7 @@ class Unit:
     board: Board = field(default_factory=Board)
     pogo: Pogo = field(default_factory=Pogo)
     actuator: Actuator = field(default_factory=Actuator)
+    lra: LraPart | None = None  # None is not written: scene hashes without it are unchanged
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "encapsulation", tuple(self.encapsulation))

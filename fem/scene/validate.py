@@ -137,6 +137,14 @@ def _read_unit(raw: Any, ctx: Context) -> dict[str, Any]:
         users = " or ".join(f'"{k}"' for k in LoadKind if k.actuator.unit_part == "actuator")
         raise SceneError("unit.actuator", f"unit.actuator is only used with load.kind = "
                          f"{users} (load.kind is {str(kind)!r}); remove it")
+    own = LoadKind(kind).actuator.own_part
+    for part in sorted({k.actuator.own_part for k in LoadKind} - {None}):
+        if part in raw and part != own:
+            users = " or ".join(f'"{k}"' for k in LoadKind if k.actuator.own_part == part)
+            raise SceneError(f"unit.{part}", f"unit.{part} is only used with load.kind = "
+                             f"{users} (load.kind is {str(kind)!r}); remove it")
+    if own is not None and own in raw:
+        out[own] = read_table(raw[own], UNIT_PARTS[own][1], f"unit.{own}", ctx)
     _check_unit_geometry(build_unit(out), ctx)
     return {key: out[key] for key in UNIT_KEYS if key in out}
 

@@ -3,6 +3,13 @@
     hapticrom calibrate examples/measurement-forearm.csv --model models/nn-default \\
         --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor --out out/cal.json \\
         --plot out/cal.png [--verify]
+    hapticrom calibrate examples/measurement-forearm-ldv.csv \\
+        --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor     # picks models/nn-normal
+
+Without ``--model`` the model is chosen by what the measurement sees: ``nn-normal`` (which
+predicts the normal component |u_z| an LDV measures, besides the magnitude) when any row's
+component is ``normal``, else ``nn-default``. A model that lacks an output a row needs is
+refused naming the row, the component and the model (exit 2).
 
 Bayesian: priors from the model's ranges (``--prior NAME=KIND:A,B`` to give one), a likelihood
 from the stated uncertainty and the surrogate's own predictive spread, emcee's ensemble sampler
@@ -27,6 +34,10 @@ from hapticrom.commands._args import number_in, positive_int
 from hapticrom.outputs import atomic_path, check_output_file
 
 __all__ = ["register"]
+
+#: the model chosen without --model: for a measurement with normal-component rows, and else
+MODEL_FOR_NORMAL = "nn-normal"
+MODEL_DEFAULT = "nn-default"
 
 
 def _sets(items: list[str]) -> dict[str, Any]:
@@ -54,6 +65,22 @@ def _seed(text: str) -> int:
     return value
 
 
+def _model(args: argparse.Namespace, measurement: Any) -> str:
+    """``--model``, or the model the measurement needs (printed with the reason)."""
+    from calibration.forward import needs_normal
+    from surrogate.runtime.models import find_model
+
+    if args.model is not None:
+        return str(find_model(args.model))  # a directory, or a name of hapticrom models list
+    normal = needs_normal(measurement)
+    name = MODEL_FOR_NORMAL if normal else MODEL_DEFAULT
+    found = find_model(name).resolve()
+    path = str(found.relative_to(Path.cwd()) if found.is_relative_to(Path.cwd()) else found)
+    print(f"model {name} ({path}): " + ("the measurement has normal-component rows"
+                                         if normal else "the measurement sees magnitudes"))
+    return path
+
+
 def _run(args: argparse.Namespace) -> int:
     from calibration import calibrate, calibration_document, read_measurement
     from surrogate.runtime import load_predictor
@@ -62,6 +89,7 @@ def _run(args: argparse.Namespace) -> int:
         if getattr(args, opt):
             check_output_file(f"--{opt}", getattr(args, opt), args.overwrite)
     measurement = read_measurement(args.measurement)
+    args.model = _model(args, measurement)
     predictor = load_predictor(args.model)
     fit = [n.strip() for n in args.fit.split(",") if n.strip()]
     sets = _sets(args.set)
@@ -149,7 +177,7 @@ def _verify(cal: Any, model: str) -> dict[str, Any]:
     for k, p in enumerate(cal.measurement.points):
         res = fe[p.frequency_hz]
         pick = (lambda u: magnitude(u)) if p.component == "magnitude" else (
-            lambda u: np.abs(u[..., 1]))
+            lambda u: np.abs(u[..., 1]))  # components r, z, t: the normal one is z
         if p.reference == "centre" and p.distance_m == 0.0:
             amp = float(pick(res.center))
         else:
@@ -187,8 +215,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("calibrate", help="fit tissue inputs of a surrogate to a "
                               "measured vibration (Bayesian, with uncertainty)")
     p.add_argument("measurement", help="measurement CSV (docs/calibration.md)")
-    p.add_argument("--model", default="models/nn-default", help="model directory "
-                   "(default models/nn-default)")
+    p.add_argument("--model", default=None, help="model directory or name (default: "
+                   f"{MODEL_FOR_NORMAL} when the measurement has normal-component rows, else "
+                   f"{MODEL_DEFAULT})")
     p.add_argument("--fit", required=True, metavar="NAMES",
                    help="comma-separated model inputs to fit, e.g. "
                    "skin_E_kPa,fat_thickness_mm,tissue_loss_factor")

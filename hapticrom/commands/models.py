@@ -1,7 +1,8 @@
-"""``hapticrom models list|show``: the model registry.
+"""``hapticrom models list|show|calibrate-intervals``: the model registry.
 
     hapticrom models list [--root models]
     hapticrom models show models/default-nn
+    hapticrom models calibrate-intervals models/nn-default [--data datasets/default] [--dry-run]
 """
 
 from __future__ import annotations
@@ -33,6 +34,23 @@ def _show(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibrate(args: argparse.Namespace) -> int:
+    from surrogate.interval_calibration import calibrate_model_dir
+
+    entry = calibrate_model_dir(args.model, args.data, check_fraction=args.check_fraction,
+                                seed=args.seed, write=not args.dry_run)
+    rows = entry["rows"]
+    print(f"{args.model}: split-conformal 95 % factors from {rows['calibration']} held-out "
+          f"rows: " + ", ".join(f"{g} {v['factor']:.3f}" for g, v in entry["groups"].items()))
+    cov = entry["coverage95_check"]
+    print(f"coverage of the 95 % interval on {rows['check']} other held-out rows "
+          "(before -> after):")
+    for name in cov["before"]:
+        print(f"  {name:22s} {cov['before'][name]:6.1%} -> {cov['after'][name]:6.1%}")
+    print("dry run: card unchanged" if args.dry_run else f"re-sealed {args.model}/card.json")
+    return 0
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``models`` subcommand group."""
     p = subparsers.add_parser("models", help="list or show registered models")
@@ -44,3 +62,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     show = sub.add_parser("show", help="print a model's verified card")
     show.add_argument("model", help="model directory")
     show.set_defaults(func=_show)
+    cal = sub.add_parser("calibrate-intervals", help="scale a model's log-std so its 95 %% "
+                         "intervals cover 95 %% of the rows its training held out "
+                         "(split conformal; re-seals the card)")
+    cal.add_argument("model", help="model directory")
+    cal.add_argument("--data", nargs="+", metavar="DATASET",
+                     help="the datasets it was trained on (default: the card's paths; their "
+                     "manifests must match the card's)")
+    cal.add_argument("--check-fraction", type=float, default=0.5,
+                     help="share of the held-out rows kept apart to measure the coverage "
+                     "(default 0.5; the rest compute the factors)")
+    cal.add_argument("--seed", type=int, default=0,
+                     help="seed of the calibration / check split (default 0)")
+    cal.add_argument("--dry-run", action="store_true", help="report, do not write the card")
+    cal.set_defaults(func=_calibrate)

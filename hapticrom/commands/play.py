@@ -67,7 +67,7 @@ def _prepare(dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
              meter: Any) -> None:
     """Integrity, limits, preflight, exposure (raises on a refusal); nothing is sent."""
     from hardware import PlanFileError
-    from hardware.limits import preflight, resolve_limits
+    from hardware.limits import preflight, rating_of, resolve_limits
 
     rec = plan.record
     dev.note("plan", path=str(args.plan), integrity=rec.status, recorded_sha256=rec.recorded,
@@ -81,7 +81,8 @@ def _prepare(dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
                                 "--allow-edited-plan (recorded in the log)")
         print(f"warning: playing a plan that is {rec.describe()} (--allow-edited-plan)",
               file=sys.stderr)
-    resolved = resolve_limits(plan.frequency_hz, dev.reported_limits(), user=_user_limits(args))
+    resolved = resolve_limits(plan.frequency_hz, dev.reported_limits(), rating_of(plan),
+                              user=_user_limits(args))
     dev.set_limits(resolved.limits)
     dev.note("limits", **resolved.to_dict())
     preflight(plan, schedule, resolved)

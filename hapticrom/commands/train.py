@@ -4,6 +4,8 @@
     hapticrom train --data datasets/default datasets/lab --kind gp --out models/gp --overwrite
     hapticrom train --data datasets/default --kind mlp --out models/mlp-baseline
     hapticrom train --data datasets/transient --kind rom --out models/rom-default
+    hapticrom train --data datasets/default --kind nn --outputs profile_um,profile_normal_um \
+        --out models/nn-normal
 
 The kinds are those of the registry :mod:`surrogate.kinds`; this command knows none by name.
 """
@@ -42,7 +44,8 @@ def _run(args: argparse.Namespace) -> int:
                      reads=args.data)
     card = train(args.data, kind.name, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
-                 options=options)
+                 options=options, outputs=args.outputs.split(","),
+                 calibration_fraction=args.calibration_fraction)
     for line in kind.report(card):
         print(line)
     print(f"wrote {args.out}")
@@ -63,9 +66,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "a dataset or a directory of other files)")
     p.add_argument("--test-fraction", type=float, default=0.2,
                    help="share of rows held out for the metrics (default 0.2)")
+    p.add_argument("--calibration-fraction", type=float, default=None,
+                   help="share of the training rows kept out of the fit to calibrate the 95 %% "
+                   "intervals (split conformal, surrogate/intervals.py; default: 0.1 when that "
+                   "is at least 100 rows, else none; 0: none -- calibrate later with hapticrom "
+                   "models calibrate-intervals)")
     p.add_argument("--seed", type=int, default=0, help="seed of split and training")
     p.add_argument("--modes", type=int, default=None,
                    help="POD modes of the log profile (default: 99.99 %% energy; gp 4)")
+    p.add_argument("--outputs", default="profile_um", metavar="NAMES",
+                   help="comma-separated profile outputs to learn besides the centre, edge and "
+                   "ratio: profile_um (the magnitude, always), profile_normal_um (the normal "
+                   "component |u_z| an LDV sees, from the column profile_uz_um); default "
+                   "profile_um")
     p.add_argument("--options", metavar="JSON",
                    help='estimator parameters, e.g. \'{"n_members": 8}\'')
     p.set_defaults(func=_run)

@@ -33,8 +33,8 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
-__all__ = ["COMPLEX_FIELDS", "COMPONENTS", "OUTPUT_FIELDS", "PROVENANCE_FIELDS",
-           "SWEEP_FIELDS", "arrow_schema", "complex_columns", "profile_matrix",
+__all__ = ["COMPLEX_FIELDS", "COMPONENTS", "OUTPUT_FIELDS", "PROFILE_OUTPUTS",
+           "PROVENANCE_FIELDS", "SWEEP_FIELDS", "arrow_schema", "complex_columns", "profile_matrix",
            "recorded_schema", "sweep_arrays", "sweep_columns"]
 
 #: Component names in the order of the solver's result arrays (U_r, U_z, U_t).
@@ -87,6 +87,18 @@ SWEEP_FIELDS = (
        for where in ("center", "edge", "profile") for c in COMPONENTS for part in ("re", "im")]
     + [pa.field("sweep_error_estimate", pa.float64()),
        pa.field("sweep_full_solves", pa.int64())])
+
+#: The profiles a steady-state surrogate can learn from single-frequency rows (``hapticrom
+#: train --outputs``): model output name -> (the dataset column on ``profile_distance_mm``,
+#: what it is). ``profile_um`` is always learned; the others are extra POD blocks
+#: (:class:`surrogate.pod.ProfileTargets`). ``profile_uz_um`` is checked against the complex
+#: columns by ``dataset validate`` (:mod:`surrogate.data.output_checks`).
+PROFILE_OUTPUTS: dict[str, tuple[str, str]] = {
+    "profile_um": ("profile_magnitude_um", "displacement magnitude |u| on the skin surface "
+                   "[um] (a 3-axis sensor)"),
+    "profile_normal_um": ("profile_uz_um", "normal component |u_z| on the skin surface [um] "
+                          "(what an LDV or a glued single-axis accelerometer sees)"),
+}
 
 
 class Space(Protocol):

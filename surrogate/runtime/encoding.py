@@ -24,7 +24,6 @@ encode identically by construction.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -32,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from fieldspec import FieldError
+from surrogate.runtime.compiled import Plan, compile_specs, fast_codes
 
 __all__ = ["InputSpec", "PredictorInputError", "compile_specs", "encode", "n_features",
            "parse_inputs"]
@@ -187,75 +187,30 @@ def _as_codes(X: Any, specs: Sequence[InputSpec]) -> np.ndarray:
     return arr
 
 
-@dataclass(frozen=True)
-class _Plan:
-    """The specs as arrays, so that a batch is checked and encoded in a few numpy operations
-    (one Python step per input would cost more than the ONNX graph at batch 1)."""
-
-    lo: np.ndarray  # (d,) range of each input's code
-    hi: np.ndarray
-    integral: np.ndarray  # (d,) bool: categorical or integer
-    positive: np.ndarray  # (d,) bool: log scale, must be > 0
-    categorical: np.ndarray  # (d,) bool: never extrapolated
-    source: np.ndarray  # (F,) input column of each feature
-    onehot: np.ndarray  # (F,) category index of a one-hot feature, -1 otherwise
-    log: np.ndarray  # (F,) bool: log of the code before scaling
-    offset: np.ndarray  # (F,) feature = (code' - offset) / span: exactly 0 and 1 at the ends
-    span: np.ndarray
-    gate: np.ndarray  # (F,) column of the controlling input, -1 when always used
-    gate_min: np.ndarray
-
-
-@functools.lru_cache(maxsize=64)
-def _plan(specs: tuple[InputSpec, ...]) -> _Plan:
-    index = {s.name: j for j, s in enumerate(specs)}
-    lo = np.array([s.range[0] for s in specs], dtype=float)
-    hi = np.array([s.range[1] for s in specs], dtype=float)
-    src, onehot, log, offset, span, gate, gate_min = [], [], [], [], [], [], []
-    for j, spec in enumerate(specs):
-        if spec.type == "categorical" and spec.encoding == "onehot":
-            for c in range(len(spec.choices)):
-                src.append(j), onehot.append(c), log.append(False)
-                offset.append(0.0), span.append(1.0), gate.append(-1), gate_min.append(0.0)
-            continue
-        if spec.type == "categorical":  # ordinal code scaled to [0, 1]
-            a, b = 0.0, float(max(len(spec.choices) - 1, 1))
-        else:
-            a, b = float(spec.low), float(spec.high)  # type: ignore[arg-type]
-            if spec.scale == "log":
-                a, b = np.log(a), np.log(b)
-        src.append(j), onehot.append(-1), log.append(spec.scale == "log")
-        offset.append(a), span.append(b - a)
-        control, minimum = spec.used_when if spec.used_when is not None else (None, 0.0)
-        gate.append(index[control] if control is not None else -1), gate_min.append(minimum)
-    integral = np.array([s.type in ("categorical", "integer") for s in specs], dtype=bool)
-    positive = np.array([s.type == "continuous" and s.scale == "log" for s in specs], dtype=bool)
-    categorical = np.array([s.type == "categorical" for s in specs], dtype=bool)
-    return _Plan(lo, hi, integral, positive, categorical, np.array(src, dtype=int),
-                 np.array(onehot),
-                 np.array(log, dtype=bool), np.array(offset), np.array(span),
-                 np.array(gate, dtype=int), np.array(gate_min, dtype=float))
-
-
-def compile_specs(specs: Sequence[InputSpec]) -> _Plan:
-    """The array form of ``specs`` that :func:`parse_inputs` and :func:`encode` use; a caller
-    that encodes often (the run-time predictor) builds it once and passes it as ``plan``."""
-    return _plan(tuple(specs))
-
-
 def parse_inputs(X: Any, specs: Sequence[InputSpec], *, extrapolate: bool = False,
-                 plan: _Plan | None = None) -> tuple[np.ndarray, np.ndarray]:
+                 plan: Plan | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Validate design points; return (codes (n, d) float64, extrapolated (n,) bool).
 
     Raises :class:`PredictorInputError` naming the input for NaN/inf, an unknown choice, a
     non-integral integer or categorical index, and -- unless ``extrapolate`` -- a value outside
-    the trained range. Categoricals and integers never extrapolate beyond their choices."""
-    codes = _as_codes(X, specs)
-    plan = plan or _plan(tuple(specs))
+    the trained range. Categoricals and integers never extrapolate beyond their choices.
+
+    The usual call (every value inside the trained range) is checked in a few array
+    operations: inside [low, high] implies finite, and > 0 on a log scale (low > 0); only a
+    batch that fails that test goes through the input-by-input checks that name the input."""
+    plan = plan or compile_specs(specs)
+    codes = fast_codes(X, plan)
+    if codes is None:
+        codes = _as_codes(X, specs)
+    inside = (codes >= plan.lo) & (codes <= plan.hi)
+    if inside.all():
+        whole = codes[:, plan.integral_cols]
+        if (whole == np.floor(whole)).all():
+            return codes, np.zeros(codes.shape[0], dtype=bool)
     with np.errstate(invalid="ignore"):
         finite = np.isfinite(codes)
         whole = ~plan.integral | (codes == np.round(codes))
-        outside_cell = (codes < plan.lo) | (codes > plan.hi)
+        outside_cell = ~inside
         bad_log = plan.positive & (codes <= 0)
     if finite.all() and whole.all() and not bad_log.any() and (
             not outside_cell.any() or (extrapolate and not outside_cell[:, plan.categorical]
@@ -291,16 +246,24 @@ def _raise_first_error(codes: np.ndarray, specs: Sequence[InputSpec], extrapolat
             raise PredictorInputError(spec.name, f"{spec.name}: a log-scale input must be > 0")
 
 
-def encode(codes: np.ndarray, specs: Sequence[InputSpec], *,
-           plan: _Plan | None = None) -> np.ndarray:
-    """Feature matrix (n, n_features(specs)) float64 of validated codes (see module doc)."""
+
+
+def encode(codes: np.ndarray, specs: Sequence[InputSpec], *, plan: Plan | None = None,
+           dtype: Any = float) -> np.ndarray:
+    """Feature matrix (n, n_features(specs)) of validated codes (see module doc), computed in
+    float64 and stored as ``dtype`` (the graph's input type)."""
     codes = np.asarray(codes, dtype=float)
-    plan = plan or _plan(tuple(specs))
+    plan = plan or compile_specs(specs)
     raw = codes[:, plan.source]
-    with np.errstate(divide="ignore", invalid="ignore"):  # log of a one-hot code: unused
-        scaled = (np.where(plan.log, np.log(raw), raw) - plan.offset) / plan.span
-    gated = plan.gate >= 0
-    if gated.any():
-        used = codes[:, np.where(gated, plan.gate, 0)] >= plan.gate_min
-        scaled = np.where(gated & ~used, 0.0, scaled)
-    return np.where(plan.onehot >= 0, (raw == plan.onehot).astype(float), scaled)
+    if plan.log_feats.size:
+        raw[:, plan.log_feats] = np.log(raw[:, plan.log_feats])
+    out = np.empty(raw.shape, dtype=dtype)
+    np.divide(raw - plan.offset, plan.span, out=out, casting="same_kind")
+    if plan.onehot_feats.size:
+        out[:, plan.onehot_feats] = raw[:, plan.onehot_feats] == plan.onehot_codes
+    if plan.gated_feats.size:
+        unused = codes[:, plan.gate_cols] < plan.gate_min
+        if unused.any():
+            out[:, plan.gated_feats] = np.where(unused, 0.0, out[:, plan.gated_feats])
+    return out
+

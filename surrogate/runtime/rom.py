@@ -26,6 +26,11 @@ The mode (log sigma, f_n), log g and s are affine in the harmonic model's encode
 (its own encoding, frequency column left out; with ``group_by`` in the coefficients one map per
 choice of that input, e.g. glued / pogo), fitted on FE transients. Designs the FE
 transient cannot run (a unit on pogo pins with no rings drifts away) are refused.
+
+The model knows its actuator: ``coefficients.actuator`` (a ``motorlaw`` drive-law name; absent
+in models trained before it was recorded, such as the shipped one: the coin ERM, ``"unit"``)
+gives its drive law, which must be a speed law (no carrier: this model's form); a caller asks
+:meth:`EnvelopeModel.check_actuator`, which refuses another actuator naming ``actuator``.
 """
 
 from __future__ import annotations
@@ -39,8 +44,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fieldspec import FieldError
 from fieldspec.documents import loads_json
-from motorlaw import SpeedLaw, held_speed_and_phase
+from motorlaw import SpeedLaw, drive_law_class, held_speed_and_phase
 from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
 from surrogate.runtime.encoding import PredictorInputError, n_features
 from surrogate.runtime.predictor import Predictor, make_session
@@ -62,12 +68,11 @@ class RomBlowUpError(RuntimeError):
     """The envelope simulation left its finite bound (kept for callers; the mode is stable)."""
 
 
-class RomInputError(ValueError):
+class RomInputError(FieldError):
     """Bad input to the envelope model; ``field`` names the offending input."""
 
     def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"{field}: {message}")
-        self.field = field
+        super().__init__(field, f"{field}: {message}")
 
 
 def motor_speed(t_s: NDArray, volts: NDArray, tau_up_s: float, tau_down_s: float,
@@ -131,7 +136,7 @@ class EnvelopeModel:
         weights: point -> (4, n_features + 1) rows for log sigma, f_n, log g and the gain's
             frequency slope (last column: intercept) over the harmonic model's encoded
             design features.
-        motor: the ERM speed law (time constants are design inputs).
+        motor: the actuator's drive law, a speed law (time constants are design inputs).
         motor_ranges: trained ranges of the motor time constants, ms.
         grid_hz: frequencies (Hz) the harmonic model is evaluated at, from 100 Hz.
         clip: parameter -> (low, high), the trained spread of each mode parameter.
@@ -145,6 +150,21 @@ class EnvelopeModel:
     grid_hz: NDArray
     clip: dict[str, tuple[float, float]]
     meta: dict[str, Any]
+
+    @property
+    def actuator(self) -> str:
+        """The actuator kind the model was trained for (``coefficients.actuator``; a model
+        that does not record it was trained on the coin ERM, ``"unit"``)."""
+        return str(self.meta.get("actuator", type(self.motor).kind))
+
+    def check_actuator(self, kind: str) -> None:
+        """Refuse an actuator the model was not trained for (:class:`RomInputError` naming
+        ``actuator``): its dynamics are the trained actuator's, not another's."""
+        if str(kind) != self.actuator:
+            raise RomInputError("actuator", f"{str(kind)!r}: this envelope model was trained "
+                                f"for the actuator {self.actuator!r} "
+                                f"({type(self.motor).title}) only; its drive dynamics are not "
+                                "another actuator's")
 
     @property
     def design_names(self) -> tuple[str, ...]:
@@ -319,10 +339,22 @@ def model_from_parts(coefficients: Mapping[str, Any], harmonic_card: dict[str, A
             columns.size or (columns.size and not 0 <= columns.min() <= columns.max() < width):
         raise ValueError(f"feature_columns: need distinct integers in [0, {width})")
     meta = {k: v for k, v in coefficients.items() if k not in ("weights", "clip", "motor")}
-    return EnvelopeModel(harmonic, weights, SpeedLaw(**coefficients["motor"]),
+    return EnvelopeModel(harmonic, weights, _speed_law(coefficients),
                          {k: (float(a), float(b))
                           for k, (a, b) in coefficients["motor_ranges"].items()},
                          grid, clip, meta)
+
+
+def _speed_law(coefficients: Mapping[str, Any]) -> SpeedLaw:
+    """The drive law of the actuator the coefficients name (``actuator``, default the coin
+    ERM ``"unit"``); this model's form (the harmonic response at the instantaneous speed, the
+    force continued as m e omega^2) needs a law whose drive sets the frequency (no carrier)."""
+    kind = coefficients.get("actuator", SpeedLaw.kind)
+    law = drive_law_class(kind)  # ValueError naming the actuators that have a law
+    if law.carrier or not issubclass(law, SpeedLaw):
+        raise ValueError(f"actuator: {kind!r} ({law.title}) is driven with a carrier; this "
+                         f"envelope model's form follows a speed law ({FORMAT})")
+    return law.from_params(coefficients["motor"])
 
 
 def load_envelope_model(path: str | Path) -> EnvelopeModel:

@@ -7,12 +7,9 @@ from __future__ import annotations
 
 from bench.count_structure import circles, function_imports
 
-#: Circles still standing, each with why.
-KNOWN_CIRCLES = {
-    ("fem.scene.io", "fem.scene.model", "fem.scene.tables", "fem.scene.validate"):
-        "Scene validates itself through the file reader (the actuators-as-types step, issue 22 "
-        "item 1, moved the load kinds out to fem/actuators but left this circle)",
-}
+#: Circles still standing, each with why: none (the last, fem/scene, went when a Scene's
+#: checks became a hook the reader registers, fem.scene.model.SCENE_CHECKS).
+KNOWN_CIRCLES: dict[tuple[str, ...], str] = {}
 
 #: Modules imported lazily anywhere, with the measured reason (numpy already loaded;
 #: `python -c "import time, numpy; t = time.perf_counter(); import M; ..."`).
@@ -36,12 +33,8 @@ LAZY_MODULES = {
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
 }
 
-MOTOR_LAW = ("the motor law and the envelope model are being reworked in these files "
-             "(motorlaw/, issue 23): left as that work has them")
 #: (file, imported module) -> reason, for project modules imported inside a function.
 LAZY_PLACES = {
-    ("fem/scene/model.py", ".io"): "the fem/scene circle (KNOWN_CIRCLES)",
-    ("fem/scene/model.py", ".validate"): "the fem/scene circle (KNOWN_CIRCLES)",
     ("hapticrom/outputs.py", "surrogate.registry"):
         "loads onnxruntime: 0.16 s of the 0.4 s of `hapticrom --help`",
     ("surrogate/train.py", "surrogate.kinds"):
@@ -49,12 +42,6 @@ LAZY_PLACES = {
         "evaluate (refine, the studies) need none of it",
     ("surrogate/data/pool.py", "fem.simulation"):
         "worker warm-up: imported in each worker process as it starts, not in the parent",
-    ("hardware/sim.py", "surrogate.runtime"): MOTOR_LAW,
-    ("hardware/sim.py", "surrogate.runtime.rom"): MOTOR_LAW,
-    ("hardware/sim.py", "planner.timing"): MOTOR_LAW,
-    ("planner/prepare.py", "surrogate.runtime.rom"): MOTOR_LAW,
-    ("planner/timing.py", "surrogate.runtime.rom"): MOTOR_LAW,
-    ("surrogate/rom.py", "surrogate.data.store"): MOTOR_LAW,
 }
 
 #: Every command's parser is built at start-up (`hapticrom --help`: 0.4 s); a command's own
@@ -73,6 +60,11 @@ def _allowed(path: str, module: str) -> bool:
 
 def test_no_import_circle_inside_a_package():
     assert {tuple(c) for c in circles()} <= set(KNOWN_CIRCLES)
+
+
+def test_fem_scene_has_no_circle_and_no_hidden_import():
+    assert not [c for c in circles() if any(m.startswith("fem.scene") for m in c)]
+    assert not [f for f in function_imports() if f[0].startswith("fem/scene/")]
 
 
 def test_function_level_imports_are_only_where_a_reason_is_given():

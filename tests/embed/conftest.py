@@ -17,9 +17,9 @@ from embed_cases import EMBED, REPO, seal_copy  # noqa: F401  (re-exported to fi
 
 @pytest.fixture(scope="session")
 def sealed(tmp_path_factory) -> dict[str, Path]:
-    """Sealed copies of nn-default and gp-default."""
+    """Sealed copies of nn-default, gp-default and nn-normal."""
     dest = tmp_path_factory.mktemp("sealed")
-    return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default")}
+    return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default", "nn-normal")}
 
 
 def _require(what: str) -> None:

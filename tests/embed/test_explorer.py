@@ -17,6 +17,7 @@ from hapticrom.commands.explore import build_explorer, make_server
 from surrogate.runtime import load_predictor
 
 RTOL = 1e-6
+SCALE = 2.1  # the largest interval_calibration factor of the shipped models (nn-default 2.09)
 Z95 = 1.959964
 
 
@@ -73,7 +74,10 @@ def test_page_numbers_equal_the_python_predictor(page):
         for key in ("center_amplitude_um", "edge_amplitude_um", "normalized_edge",
                     "edge_radius_mm", "profile_um", "profile_um_low95", "profile_um_high95"):
             ref = band[key][i] if key in band else want[key][i]
-            np.testing.assert_allclose(got[key], ref, rtol=RTOL, err_msg=f"design {i}: {key}")
+            # a band's exponent carries 1.96 x the card's interval factor (up to 2.1) x the
+            # log-std's own difference between the two runtimes
+            tol = RTOL * (1 + Z95 * SCALE) if key in band else RTOL
+            np.testing.assert_allclose(got[key], ref, rtol=tol, err_msg=f"design {i}: {key}")
             worst = max(worst, float(np.max(np.abs(np.subtract(got[key], ref)) / np.abs(ref))))
     print(f"explorer vs Python, 20 designs: max relative difference {worst:.2e}")
 

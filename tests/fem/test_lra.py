@@ -90,3 +90,43 @@ def test_sweep_scaling_follows_the_force_of_each_frequency():
     scale = LRA.load_scale(2 * np.pi * freqs, 2 * np.pi * 200.0)
     force = [LRA.force_N(_scene("lra", force_N=0.3, frequency_hz=f)) for f in freqs]
     np.testing.assert_allclose(scale, np.array(force) / force[-1], rtol=1e-12)
+
+
+def test_unit_lra_table_sets_the_resonator_and_round_trips():
+    d = scene_to_dict(_scene("lra", frequency_hz=150.0))
+    assert "lra" not in d["unit"]  # absent: not written (scene hashes unchanged)
+    d["unit"]["lra"] = {"resonance_hz": 150.0, "quality_factor": 5.0, "moving_mass_g": 2.0}
+    scene = scene_from_dict(d)
+    assert scene.unit.lra.resonance_hz == 150.0 and scene.unit.lra.moving_mass_kg == 2e-3
+    assert LRA.law(scene).tau_s == pytest.approx(5.0 / (np.pi * 150.0))
+    assert LRA.force_N(scene) == pytest.approx(0.01)  # driven at its own resonance
+    assert LRA.force_N(_scene("lra", frequency_hz=150.0)) < 0.01  # the default resonance
+    assert scene_from_dict(scene_to_dict(scene)) == scene
+
+
+@pytest.mark.parametrize(("key", "value", "allowed"), [
+    ("resonance_hz", 5.0, "20"), ("quality_factor", 0.0, "0.5"),
+    ("moving_mass_g", 1e3, "100"), ("max_voltage_V", 1.0, "rated_voltage_V")])
+def test_unit_lra_table_out_of_range_names_the_field(key, value, allowed):
+    d = scene_to_dict(_scene("lra"))
+    d["unit"]["lra"] = {key: value}
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(d)
+    assert info.value.field == f"unit.lra.{key}" and allowed in str(info.value)
+
+
+def test_unit_lra_table_only_with_an_lra():
+    d = scene_to_dict(_scene("normal_actuator"))
+    d["unit"]["lra"] = {"resonance_hz": 150.0}
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(d)
+    assert info.value.field == "unit.lra" and '"lra"' in str(info.value)
+
+
+def test_the_solver_and_the_run_time_share_one_drive_law():
+    from motorlaw import ResonantDrive, drive_law
+
+    assert LRA.law() == ResonantDrive() == drive_law(LRA.kind)  # registered by its load.kind
+    assert (LRA.RESONANCE_HZ, LRA.QUALITY_FACTOR) == (LRA.law().resonance_hz,
+                                                      LRA.law().quality_factor)
+    assert drive_law(actuator("unit").kind).kind == "unit"  # the ERM's speed law

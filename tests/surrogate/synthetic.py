@@ -35,10 +35,15 @@ def synthetic_amplitudes(orientation: np.ndarray, n_rings: np.ndarray, E_kPa: np
     return center, profile
 
 
-def make_dataset(path, n: int, start: int = 0, reverse: bool = False):
+def synthetic_normal(profile: np.ndarray, E_kPa: np.ndarray) -> np.ndarray:
+    """A smooth known normal component |u_z| (n, m) [um] below the magnitude ``profile``."""
+    return profile * (0.55 + 0.3 * np.cos(GRID_MM[None, :] / 6.0 + E_kPa[:, None] / 80.0))
+
+
+def make_dataset(path, n: int, start: int = 0, reverse: bool = False, normal: bool = False):
     """Write a synthetic dataset of ``n`` Sobol points at ``path``; returns the path.
     ``reverse`` stores the rows last first, one part per row (as workers finishing out of
-    order would)."""
+    order would); ``normal`` stores ``profile_uz_um`` (:func:`synthetic_normal`) too."""
     from surrogate.data.space import space_from_dict
     from surrogate.data.store import Store
 
@@ -46,6 +51,7 @@ def make_dataset(path, n: int, start: int = 0, reverse: bool = False):
     pts = space.points(start, n)
     center, profile = synthetic_amplitudes(pts["orientation"], pts["n_rings"].astype(float),
                                            pts["skin_E_kPa"], pts["frequency_hz"])
+    uz = synthetic_normal(profile, pts["skin_E_kPa"])
     store = Store.create(path, space, profile_grid_mm=GRID_MM.tolist())
     rows = []
     for i in range(n):
@@ -56,7 +62,8 @@ def make_dataset(path, n: int, start: int = 0, reverse: bool = False):
                      "edge_amplitude_um": profile[i, 0],
                      "normalized_edge": profile[i, 0] / center[i],
                      "profile_distance_mm": GRID_MM.tolist(),
-                     "profile_magnitude_um": profile[i].tolist()})
+                     "profile_magnitude_um": profile[i].tolist(),
+                     **({"profile_uz_um": uz[i].tolist()} if normal else {})})
     with store.lock():
         if reverse:
             for row in reversed(rows):

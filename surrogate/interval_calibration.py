@@ -1,0 +1,83 @@
+"""Calibrate the intervals of a trained model on the rows its training held out
+(``hapticrom models calibrate-intervals``; the method: :mod:`surrogate.intervals`)."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate.intervals import calibrate, coverage, residuals
+from surrogate.registry import manifest_sha256
+from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
+from surrogate.runtime.predictor import CALIBRATION_KEY, SCALAR_OUTPUTS, load_predictor
+from surrogate.train import load_datasets, split
+
+__all__ = ["calibrate_model_dir"]
+
+
+def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = None, *,
+                        check_fraction: float = 0.5, seed: int = 0, write: bool = True
+                        ) -> dict[str, Any]:
+    """Calibrate a trained model's intervals on the rows its training held out (re-derived
+    from the card's ``training`` seed and test fraction on its own datasets, whose manifests
+    must match the card's, or at least its space and row count -- a manifest re-sealed since
+    holds the same rows): a seeded ``1 - check_fraction`` of them compute the factors, the
+    rest measure the coverage before and after. Writes the sealed card (unless ``write`` is
+    False); returns the ``interval_calibration`` entry."""
+    root = Path(path)
+    card = verify_model_dir(root)
+    training, sources = card.get("training", {}), card.get("training_data", [])
+    if "seed" not in training or "test_fraction" not in training or not sources:
+        raise ValueError(f"{root}: the card does not record its held-out rows (training.seed, "
+                         "training.test_fraction, training_data)")
+    if not 0 < check_fraction < 1:
+        raise ValueError(f"--check-fraction {check_fraction}: must be in (0, 1)")
+    paths = [Path(p) for p in (data or [s["path"] for s in sources])]
+    if len(paths) != len(sources):
+        raise ValueError(f"--data: {len(paths)} datasets, the card names {len(sources)}")
+    raw = load_predictor(root, calibrated=False)
+    extra = [name for name in raw.output_names
+             if name not in (*SCALAR_OUTPUTS, "profile_um", "edge_radius_mm")]
+    rows = load_datasets(paths, outputs=extra)
+    for p, s, now in zip(paths, sources, rows.sources, strict=True):
+        if manifest_sha256(p) != s["manifest_sha256"] and (
+                now["space_hash"] != s.get("space_hash") or now["rows"] != s.get("rows")):
+            raise ValueError(f"--data {p}: not the data the model was trained on ({s['path']}: "
+                             "its manifest, space and row count differ); the held-out rows "
+                             "would not be those")
+    tr, te = split(len(rows.codes), float(training["test_fraction"]), int(training["seed"]))
+    if "rows" in training and tr.size != int(training["rows"]) + int(
+            training.get("calibration_rows", 0)):
+        raise ValueError(f"{root}: the split gives {tr.size} training rows, the card "
+                         f"{training['rows']}; not the data the model was trained on")
+    perm = np.random.default_rng(seed).permutation(te)
+    n_check = round(check_fraction * perm.size)
+    cal, check = np.sort(perm[n_check:]), np.sort(perm[:n_check])
+    r_cal = residuals(raw.predict(rows.codes[cal]), rows.center_um[cal], rows.profile_um[cal],
+                      {name: rows.extra_um[name][cal] for name in extra})
+    r_check = residuals(raw.predict(rows.codes[check]), rows.center_um[check],
+                        rows.profile_um[check],
+                        {name: rows.extra_um[name][check] for name in extra})
+    entry = calibrate(r_cal, extra=extra)
+    entry["rows"] = {"from": "the rows training held out (training.seed, "
+                     "training.test_fraction)", "seed": seed, "calibration": int(cal.size),
+                     "check": int(check.size), "data": rows.sources}
+    entry["coverage95_check"] = {"before": coverage(r_check, extra=extra),
+                                 "after": coverage(r_check, entry["log_std_scale"], extra)}
+    entry["command"] = "hapticrom models calibrate-intervals"
+    if write:
+        _write_card(root, {**card, CALIBRATION_KEY: entry})
+    return entry
+
+
+def _write_card(root: Path, card: dict[str, Any]) -> None:
+    """Replace ``card.json`` atomically with the sealed ``card`` (the files are unchanged)."""
+    tmp = root.parent / f".{root.name}.{CARD_NAME}.tmp"
+    tmp.write_text(json.dumps(seal_card(card), indent=1) + "\n")
+    os.replace(tmp, root / CARD_NAME)
+    verify_model_dir(root)
