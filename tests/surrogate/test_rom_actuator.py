@@ -26,9 +26,13 @@ def parts():
     return coefficients, hcard, SHIPPED / card["harmonic"]["graph"]
 
 
-def test_the_shipped_model_is_the_erms_and_refuses_an_lra():
+def test_the_shipped_model_is_the_erms_and_refuses_an_lra(parts):
     model = load_envelope_model(SHIPPED)
-    assert "actuator" not in model.meta and model.actuator == "unit"
+    assert model.meta["actuator"] == "unit" and model.actuator == "unit"
+    coefficients, hcard, graph = parts  # a model trained before the key: the coin ERM
+    legacy = model_from_parts({k: v for k, v in coefficients.items() if k != "actuator"},
+                              hcard, graph)
+    assert "actuator" not in legacy.meta and legacy.actuator == "unit"
     model.check_actuator("unit")
     with pytest.raises(RomInputError) as err:
         model.check_actuator("lra")
