@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from calibration import calibrate, surrogate_std_factor
-from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, SPREADS
+from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
 from calibration.forward import ForwardModel
 from calibration.synthetic import synthetic_measurement
 from surrogate.runtime import load_predictor
@@ -155,6 +155,65 @@ def residuals(subjects: list[dict], predictor, component: str = "magnitude") -> 
             + f"{np.mean(np.corrcoef(R.T)[0, 1:]):.2f} (mean over the profile)"]
 
 
+def held_out_residuals(predictor) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The surrogate's error on the rows of its training data it never trained on (the
+    card's held-out split, where its metrics come from): per output read by a calibration,
+    (ln(FE / surrogate), its predictive log-std), each (rows, points)."""
+    from surrogate.data.columns import PROFILE_OUTPUTS
+    from surrogate.train import load_datasets, split
+
+    card = predictor.card
+    extra = [o for o in card["training"].get("profile_outputs", {}) if o != "profile_um"]
+    data = load_datasets([ROOT / d["path"] for d in card["training_data"]], outputs=extra)
+    _, te = split(len(data.codes), card["training"]["test_fraction"], card["training"]["seed"])
+    out = predictor.predict(data.codes[te])
+    truth = {"center_amplitude_um": data.center_um[te][:, None],
+             "profile_um": data.profile_um[te],
+             **{o: data.extra_um[o][te] for o in extra if o in PROFILE_OUTPUTS}}
+    res = {}
+    for name, y in truth.items():
+        mu = out[name].reshape(len(te), -1)
+        res[name] = (np.log(y / mu), out[f"{name}_log_std"].reshape(len(te), -1))
+    return res
+
+
+def fit_surrogate_error(predictor, outputs: tuple[str, ...]) -> list[str]:
+    """Fit the multivariate Student-t of calibration.likelihood to the held-out residual
+    vectors of each output (one vector per held-out row: the profile's points, correlated as
+    the calibration assumes, ERROR_LENGTH_MM): maximum likelihood of the degrees of freedom
+    nu and the scale c of S = c^2 diag(s) C diag(s); the Gaussian (nu = inf) beside it."""
+    from scipy.optimize import minimize
+
+    from calibration.likelihood import mvt_logpdf
+
+    grid = np.asarray(predictor.profile_distance_mm, dtype=float)
+    lines = []
+    for name, (r, sd) in held_out_residuals(predictor).items():
+        if name not in outputs:
+            continue
+        m = r.shape[1]
+        C = (np.ones((1, 1)) if m == 1 else
+             np.exp(-np.abs(grid[:, None] - grid[None, :]) / ERROR_LENGTH_MM.get(name, 20.0)))
+        x = r / sd  # residual in units of its log-std: S = c^2 C, minus sum ln s (constant)
+
+        def nll(p: np.ndarray, nu: float | None = None, x: np.ndarray = x,
+                C: np.ndarray = C) -> float:
+            c = np.exp(p[0])
+            v = np.exp(p[1]) if nu is None else nu
+            return -float(np.sum(mvt_logpdf(x, c ** 2 * C, v)))
+
+        t = minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead",
+                     options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 2000})
+        g = minimize(lambda p: nll(p, np.inf), np.array([0.0]), method="Nelder-Mead")
+        z = np.abs(x).ravel()
+        lines.append(f"  {name}: {r.shape[0]} held-out rows x {m} points: Student-t nu "
+                     f"{np.exp(t.x[1]):.3g}, scale {np.exp(t.x[0]):.3g} (log-lik "
+                     f"{-t.fun:.1f}); Gaussian scale {np.exp(g.x[0]):.3g} (log-lik {-g.fun:.1f}); "
+                     f"|z| within 1.96: {np.mean(z <= 1.96):.1%}, 99th percentile "
+                     f"{np.percentile(z, 99):.1f}")
+    return lines
+
+
 def spread_swing(subjects: list[dict], predictor, ids: tuple[int, ...] = (0, 5)) -> list[str]:
     """How much the surrogate's spread, evaluated at each theta, moves the likelihood's
     normalising term -1/2 ln det(cov) along the fat thickness (3-20 mm, the true skin and loss)
@@ -231,6 +290,9 @@ def main() -> None:
                     "nn-default for magnitude, nn-normal for normal)")
     ap.add_argument("--spread", default="posterior", choices=SPREADS,
                     help="how the surrogate's spread enters the likelihood (calibration.fit)")
+    ap.add_argument("--error-model", default="t", choices=ERROR_MODELS,
+                    help="the surrogate's error: Student-t (SURROGATE_ERROR_T) or the Gaussian "
+                    "with the card's factor (calibration.fit)")
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--std-factor", type=float, default=None)
     ap.add_argument("--error-length-mm", type=float, default=None,
@@ -241,6 +303,9 @@ def main() -> None:
     ap.add_argument("--json", type=Path, help="write the records")
     ap.add_argument("--residuals", action="store_true",
                     help="only measure the surrogate's error structure on the residual subjects")
+    ap.add_argument("--surrogate-error", action="store_true",
+                    help="only fit the Student-t of the surrogate's error (nu, scale) to its "
+                    "held-out rows, per output the sensor kind reads")
     ap.add_argument("--spread-swing", action="store_true",
                     help="only print how the spread at each theta moves the likelihood's "
                     "normalising term along the fat thickness (subjects 0 and 5)")
@@ -265,6 +330,13 @@ def main() -> None:
         print("\n".join(spread_swing(json.loads(CACHE.read_text())["subjects"],
                                      predictors[sensors[0]])))
         return
+    if args.surrogate_error:
+        reads = {"magnitude": ("center_amplitude_um", "profile_um"),
+                 "normal": ("profile_normal_um",)}
+        for s, predictor in predictors.items():
+            print(f"{s} ({predictor.card.get('name')}):")
+            print("\n".join(fit_surrogate_error(predictor, reads[s])))
+        return
     if args.residuals:
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
@@ -277,10 +349,12 @@ def main() -> None:
     for s, predictor in predictors.items():
         records += run(subjects, predictor, component=s, steps=args.steps,
                        std_factor=args.std_factor, error_length_mm=args.error_length_mm,
-                       error_frequency_hz=args.error_frequency_hz, spread=args.spread)
+                       error_frequency_hz=args.error_frequency_hz, spread=args.spread,
+                       error_model=args.error_model)
     print(f"{len(subjects)} FE subjects x {len(NOISES)} noise levels x sensors "
           + ", ".join(f"{s} (model {p.card.get('name')})" for s, p in predictors.items())
-          + f", spread {args.spread}, {time.perf_counter() - t0:.0f} s in all")
+          + f", spread {args.spread}, error model {args.error_model}, "
+          f"{time.perf_counter() - t0:.0f} s in all")
     print("\n".join(table(records)))
     if args.json:
         args.json.write_text(json.dumps(records, indent=1) + "\n")

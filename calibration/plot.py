@@ -44,7 +44,7 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
     rng = np.random.default_rng(seed)
     pick = rng.choice(len(cal.samples), size=min(n_draws, len(cal.samples)), replace=False)
     mean, std = fwd.predict(cal.samples[pick])
-    draws = mean + cal.std_factor * std * rng.standard_normal(mean.shape)
+    draws = mean + cal.surrogate_error_draws(fwd, std, rng)
     lo, mid, hi = (np.exp(np.percentile(draws, q, axis=0)) * 1e6 for q in (2.5, 50, 97.5))
     r_edge_mm = cal.forward.edge_radius_m * 1e3
     radius = np.array([0.0 if t[2] == "centre" else r_edge_mm + t[3] for t in tags])
