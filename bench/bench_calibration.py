@@ -177,16 +177,57 @@ def held_out_residuals(predictor) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return res
 
 
-def fit_surrogate_error(predictor, outputs: tuple[str, ...]) -> list[str]:
-    """Fit the multivariate Student-t of calibration.likelihood to the held-out residual
-    vectors of each output (one vector per held-out row: the profile's points, correlated as
-    the calibration assumes, ERROR_LENGTH_MM): maximum likelihood of the degrees of freedom
-    nu and the scale c of S = c^2 diag(s) C diag(s); the Gaussian (nu = inf) beside it."""
+def subject_residuals(subjects: list[dict], predictor, component: str
+                      ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """As :func:`held_out_residuals` on FE subjects (one row per subject and frequency): the
+    unit's face (magnitude) and the profile of the ``component``."""
+    prof = "profile_um" if component == "magnitude" else "profile_normal_um"
+    rows: dict[str, list] = {"center_amplitude_um": [], prof: []}
+    for s in subjects:
+        for i, f in enumerate(s["frequencies_hz"]):
+            X = {k: np.array([v]) for k, v in {**s["design"], **s["truth"]}.items()}
+            X["frequency_hz"] = np.array([f])
+            o = predictor.predict(X)
+            fe = {"center_amplitude_um": [s["centre_um"]["magnitude"][i]],
+                  prof: s["profile_um"][component][i]}
+            for name, y in fe.items():
+                rows[name].append((np.log(np.asarray(y) / o[name][0]),
+                                   np.atleast_1d(o[f"{name}_log_std"][0])))
+    return {n: (np.array([r[0] for r in v]), np.array([r[1] for r in v]))
+            for n, v in rows.items()}
+
+
+def fit_t(r: np.ndarray, sd: np.ndarray, corr: np.ndarray) -> dict[str, float]:
+    """Maximum likelihood of the multivariate Student-t of calibration.likelihood for the
+    residual vectors ``r`` (rows) with log-std ``sd``: nu and the scale c of
+    S = c^2 diag(sd) corr diag(sd); the Gaussian's scale and both log-likelihoods (of r / sd)."""
     from scipy.optimize import minimize
 
     from calibration.likelihood import mvt_logpdf
 
+    x = r / sd  # in units of the log-std: S = c^2 corr (the Jacobian sum ln sd is a constant)
+
+    def nll(p: np.ndarray, nu: float | None = None) -> float:
+        v = np.exp(p[1]) if nu is None else nu
+        return -float(np.sum(mvt_logpdf(x, np.exp(2 * p[0]) * corr, v)))
+
+    t = minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead",
+                 options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 2000})
+    g = minimize(lambda p: nll(p, np.inf), np.array([0.0]), method="Nelder-Mead")
+    return {"nu": float(np.exp(t.x[1])), "scale": float(np.exp(t.x[0])), "loglik": -t.fun,
+            "gauss_scale": float(np.exp(g.x[0])), "gauss_loglik": -g.fun}
+
+
+def fit_surrogate_error(predictor, component: str) -> list[str]:
+    """Fit the multivariate Student-t of calibration.likelihood to the held-out residual
+    vectors of each output a ``component`` sensor reads (one vector per held-out row: the
+    profile's points, correlated as the calibration assumes, ERROR_LENGTH_MM); beside it the
+    same fit on the FE subjects of --residuals (one vector per subject and frequency)."""
+    outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
+               ("profile_normal_um",))
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
+    other = subject_residuals(json.loads(RESIDUAL_CACHE.read_text())["subjects"], predictor,
+                              component)
     lines = []
     for name, (r, sd) in held_out_residuals(predictor).items():
         if name not in outputs:
@@ -194,23 +235,15 @@ def fit_surrogate_error(predictor, outputs: tuple[str, ...]) -> list[str]:
         m = r.shape[1]
         C = (np.ones((1, 1)) if m == 1 else
              np.exp(-np.abs(grid[:, None] - grid[None, :]) / ERROR_LENGTH_MM.get(name, 20.0)))
-        x = r / sd  # residual in units of its log-std: S = c^2 C, minus sum ln s (constant)
-
-        def nll(p: np.ndarray, nu: float | None = None, x: np.ndarray = x,
-                C: np.ndarray = C) -> float:
-            c = np.exp(p[0])
-            v = np.exp(p[1]) if nu is None else nu
-            return -float(np.sum(mvt_logpdf(x, c ** 2 * C, v)))
-
-        t = minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead",
-                     options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 2000})
-        g = minimize(lambda p: nll(p, np.inf), np.array([0.0]), method="Nelder-Mead")
-        z = np.abs(x).ravel()
-        lines.append(f"  {name}: {r.shape[0]} held-out rows x {m} points: Student-t nu "
-                     f"{np.exp(t.x[1]):.3g}, scale {np.exp(t.x[0]):.3g} (log-lik "
-                     f"{-t.fun:.1f}); Gaussian scale {np.exp(g.x[0]):.3g} (log-lik {-g.fun:.1f}); "
-                     f"|z| within 1.96: {np.mean(z <= 1.96):.1%}, 99th percentile "
-                     f"{np.percentile(z, 99):.1f}")
+        f, o = fit_t(r, sd, C), fit_t(*other[name], C)
+        z = np.abs(r / sd).ravel()
+        lines += [f"  {name}: {r.shape[0]} held-out rows x {m} points: Student-t nu "
+                  f"{f['nu']:.3g}, scale {f['scale']:.3g} (log-lik {f['loglik']:.1f}); Gaussian "
+                  f"scale {f['gauss_scale']:.3g} (log-lik {f['gauss_loglik']:.1f}); |z| within "
+                  f"1.96: {np.mean(z <= 1.96):.1%}, 99th percentile {np.percentile(z, 99):.1f}",
+                  f"    on the {len(other[name][0])} FE solves of --residuals: nu {o['nu']:.3g}, "
+                  f"scale {o['scale']:.3g} (log-lik {o['loglik']:.1f}); Gaussian scale "
+                  f"{o['gauss_scale']:.3g} (log-lik {o['gauss_loglik']:.1f})"]
     return lines
 
 
@@ -331,11 +364,9 @@ def main() -> None:
                                      predictors[sensors[0]])))
         return
     if args.surrogate_error:
-        reads = {"magnitude": ("center_amplitude_um", "profile_um"),
-                 "normal": ("profile_normal_um",)}
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
-            print("\n".join(fit_surrogate_error(predictor, reads[s])))
+            print("\n".join(fit_surrogate_error(predictor, s)))
         return
     if args.residuals:
         for s, predictor in predictors.items():
