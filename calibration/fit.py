@@ -188,31 +188,6 @@ class Calibration:
         return mean, self.point_scale * std
 
 
-def _fixed_log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
-                          k: float, corr: np.ndarray) -> np.ndarray:
-    """As :func:`_log_likelihood` with one covariance for every row: ``std`` (m,) fixed."""
-    cov = (k * std)[:, None] * corr * (k * std)[None, :]
-    cov[np.arange(y.size), np.arange(y.size)] += rel ** 2
-    chol = np.linalg.cholesky(cov)
-    w = np.linalg.solve(chol, (y - mean).T)
-    logdet = 2.0 * np.sum(np.log(np.diagonal(chol)))
-    return -0.5 * (np.sum(w ** 2, axis=0) + logdet + y.size * np.log(2 * np.pi))
-
-
-def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
-                    k: float, corr: np.ndarray) -> np.ndarray:
-    """Gaussian log-likelihood of ln y for each row of ``mean``/``std`` (n, m): covariance
-    diag(rel^2) + k^2 diag(std) corr diag(std), one batched Cholesky factorisation."""
-    ks = k * std
-    cov = ks[:, :, None] * corr[None, :, :] * ks[:, None, :]
-    cov[:, np.arange(y.size), np.arange(y.size)] += rel ** 2
-    chol = np.linalg.cholesky(cov)
-    r = (y - mean)[:, :, None]
-    w = np.linalg.solve(chol, r)[:, :, 0]
-    logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
-    return -0.5 * (np.sum(w ** 2, axis=1) + logdet + y.size * np.log(2 * np.pi))
-
-
 def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
               walkers: int = 32, steps: int = 1000, burn: int = 333, n_init: int = 4096,
