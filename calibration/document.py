@@ -62,10 +62,11 @@ def statement(summary: dict[str, dict[str, Any]]) -> str:
 
 
 def calibration_document(cal: Calibration, *, model_path: str, tissue_names: list[str],
-                         seed: int = 0) -> dict[str, Any]:
-    """The versioned document of a fitted calibration."""
+                         seed: int = 0, interval: str = "hdi") -> dict[str, Any]:
+    """The versioned document of a fitted calibration (``interval``: the kind of the
+    reported ``ci95``, :data:`calibration.fit.INTERVAL_KINDS`)."""
     card = cal.forward.predictor.card
-    summary = cal.summary(seed)
+    summary = cal.summary(seed, interval=interval)
     m = cal.measurement
     mean, std = cal.forward.predict(np.array([[cal.mean_inputs()[n] for n in cal.names]]))
     total = np.sqrt(cal.forward.rel_sigma ** 2 + (cal.point_scale * std[0]) ** 2)

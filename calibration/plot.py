@@ -38,7 +38,7 @@ def _dense(cal: Calibration, step_mm: float = 0.5) -> tuple[ForwardModel, list[t
 
 
 def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int = 200,
-                           seed: int = 0) -> None:
+                           seed: int = 0, interval: str = "hdi") -> None:
     """Write the figure (PNG) to ``path``."""
     fwd, tags = _dense(cal)
     rng = np.random.default_rng(seed)
@@ -75,10 +75,12 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
         ax.set_ylabel("peak displacement amplitude [um]")
         ax.legend(loc="upper right")
         figstyle.plain_log_ticks(ax)
-    summary = cal.summary(seed)
+    summary = cal.summary(seed, interval=interval)
     fitted = "; ".join(f"{n} {s['mean']:.3g} [{s['ci95'][0]:.3g}, {s['ci95'][1]:.3g}]"
                        + ("" if s["identifiable"] else " (not determined)")
                        for n, s in summary.items())
+    errors = ", ".join(f"Student-t nu {e['nu']:g}, x{e['scale']:.2f}" if e["nu"] is not None
+                       else f"Gaussian x{e['scale']:.2f}" for e in cal.error_model.values())
     design = ", ".join(f"{k} {v}" for k, v in cal.measurement.design.items()
                        if k in ("orientation", "attachment", "n_rings"))
     figstyle.annotate(
@@ -87,7 +89,7 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
         frequency=", ".join(f"{f:g} Hz" for f in cal.measurement.frequencies_hz),
         plotted="peak displacement amplitude [um] on the skin surface against distance from "
                 "the unit's centre; band: posterior predictive 95 % (tissue posterior and the "
-                f"surrogate's spread x{cal.std_factor:.2f})",
-        note=f"Posterior mean [95 % interval]: {fitted}. Model "
+                f"surrogate's error: {errors})",
+        note=f"Posterior mean [95 % {interval.replace('_', '-')} interval]: {fitted}. Model "
              f"{cal.forward.predictor.card.get('name')}.")
     figstyle.save(fig, path)
