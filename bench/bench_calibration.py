@@ -72,8 +72,10 @@ def run(subjects: list[dict], predictor, *, component: str = "magnitude",
     return records
 
 
-def table(records: list[dict]) -> list[str]:
-    """The summary lines per sensor kind, fitted input and noise level (and over all)."""
+def table(records: list[dict], interval: str = "ci95") -> list[str]:
+    """The summary lines per sensor kind, fitted input and noise level (and over all);
+    coverage by the records' ``interval`` (``ci95``, the reported one; ``ci95_hdi`` or
+    ``ci95_equal_tailed``); "determined" is always the reported interval's."""
     lines = [f"{'sensor':9s} {'input':20s} {'noise':>5s} {'n':>4s} {'coverage':>9s} "
              f"{'determined':>10s} {'cov. det.':>14s} {'med |err|':>10s} "
              f"{'med |err|/range':>15s}"]
@@ -86,8 +88,8 @@ def table(records: list[dict]) -> list[str]:
         for sensor, noise in groups:
             rs = [r for r in records if (noise is None or r["noise"] == noise)
                   and sensor in ("all", r.get("sensor", "magnitude"))]
-            inside = [r["summary"][name]["ci95"][0] <= r["truth"][name]
-                      <= r["summary"][name]["ci95"][1] for r in rs]
+            inside = [r["summary"][name][interval][0] <= r["truth"][name]
+                      <= r["summary"][name][interval][1] for r in rs]
             det = [r["summary"][name]["identifiable"] for r in rs]
             cov_det = [i for i, d in zip(inside, det, strict=True) if d]
             err = [abs(r["summary"][name]["mean"] - r["truth"][name]) for r in rs]
@@ -344,12 +346,15 @@ def main() -> None:
                     "normalising term along the fat thickness (subjects 0 and 5)")
     ap.add_argument("--table", type=Path, nargs="+", metavar="JSON",
                     help="only print the table of records written by earlier runs (--json)")
+    ap.add_argument("--interval", default="ci95",
+                    choices=("ci95", "ci95_hdi", "ci95_equal_tailed"),
+                    help="with --table: the interval whose coverage is counted")
     ap.add_argument("--misses", action="store_true",
                     help="with --table: why the fat thickness's interval misses when determined")
     args = ap.parse_args()
     if args.table:
         records = [r for p in args.table for r in json.loads(p.read_text())]
-        print("\n".join(table(records)))
+        print("\n".join(table(records, args.interval)))
         if args.misses:
             kinds = sorted({r.get("sensor", "magnitude") for r in records})
             print("\n".join(misses(records, {s: load_predictor(args.model or MODELS[s])

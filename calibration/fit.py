@@ -1,22 +1,26 @@
 """The Bayesian fit: the posterior of chosen tissue inputs given a measurement, sampled with
 emcee's ensemble sampler on the run-time surrogate.
 
-Likelihood (docs/calibration.md): each measured amplitude y_i (peak displacement [m], converted
-by :mod:`calibration.measurement`) is log-normal about the surrogate's prediction mu_i(theta),
+Likelihood (docs/calibration.md, :mod:`calibration.likelihood`): each measured amplitude y_i
+(peak displacement [m], converted by :mod:`calibration.measurement`) is about the surrogate's
+prediction mu_i(theta) as
 
-    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s) C diag(s)),
+    ln y - ln mu(theta) = e + n,  n ~ N(0, diag((sigma_i / y_i)^2)),
+    e | lam ~ N(0, lam c^2 diag(s) C diag(s)),  lam ~ InverseGamma(nu / 2, nu / 2) per output,
 
 with sigma_i the stated standard uncertainty (independent between points), s_i the
-surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened by ``k`` =
-:func:`surrogate_std_factor` where the model card's held-out coverage shows the bounds too
-narrow, and C the correlation of the surrogate's errors between points
+surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), nu and c per output
+read (:data:`SURROGATE_ERROR_T`: a multivariate Student-t fitted to the model's held-out
+rows; for an output not listed, or with ``error_model = "gaussian"`` or a given
+``std_factor``, lam = 1 and c = ``k`` = :func:`surrogate_std_factor`, the card's widening),
+and C the correlation of the surrogate's errors between points
 (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
 too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
 
 The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
 burn-in (over the starting walkers when there is no burn-in). Evaluated at every theta
-(``spread = "local"``, as before), the normalising term -1/2 ln det of the covariance moved
+(``spread = "local"``, as before), the normalising term -1/2 ln det of the (Gaussian's) covariance moved
 with the ensemble's spread: by 5.2 nats (a factor of about 180) along the fat thickness at
 fixed skin and loss for one synthetic subject (the ensemble has 5 members, so its spread is
 itself a noisy estimate), an implicit prior towards wherever the members happen to agree
