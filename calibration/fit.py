@@ -20,7 +20,8 @@ too, so its error does not average out over many points). Priors: :mod:`calibrat
 The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
 burn-in (over the starting walkers when there is no burn-in). Evaluated at every theta
-(``spread = "local"``, as before), the normalising term -1/2 ln det of the (Gaussian's) covariance moved
+(``spread = "local"``, as before), the normalising term -1/2 ln det of the (Gaussian's)
+covariance moved
 with the ensemble's spread: by 5.2 nats (a factor of about 180) along the fat thickness at
 fixed skin and loss for one synthetic subject (the ensemble has 5 members, so its spread is
 itself a noisy estimate), an implicit prior towards wherever the members happen to agree
