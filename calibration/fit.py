@@ -161,7 +161,7 @@ class Calibration:
             x = self.samples[:, j]
             prior_z = p.sample_z(20000, rng)
             pw = np.subtract(*np.percentile(prior_z, [97.5, 2.5]))
-            zi = {"hdi": np.array(hdi(z[:, j], 0.95)),
+            zi = {"hdi": np.array(hdi(z[:, j], 0.95, p.z_bounds)),
                   "equal_tailed": np.percentile(z[:, j], [2.5, 97.5])}
             ratio = float((zi[interval][1] - zi[interval][0]) / pw) if pw > 0 else math.inf
             ci = {k: [float(v) for v in p.from_z(v)] for k, v in zi.items()}

@@ -103,13 +103,23 @@ def mixture_log_likelihood(r: np.ndarray, noise_var: np.ndarray, surrogate_cov: 
     return total
 
 
-def hdi(draws: np.ndarray, mass: float = 0.95) -> tuple[float, float]:
+def hdi(draws: np.ndarray, mass: float = 0.95,
+        bounds: tuple[float, float] = (-math.inf, math.inf)) -> tuple[float, float]:
     """The highest-density interval of ``draws`` (1-d): the shortest interval holding
-    ``mass`` of them (for a unimodal density, the interval whose ends have equal density; for
-    draws piled against a bound, the interval that starts at the bound's draws)."""
+    ``mass`` of them (for a unimodal density, the interval whose ends have equal density).
+    ``bounds``: the support's (the prior's) bounds: an end of the interval among the 1 % of
+    draws nearest a bound is moved to the bound when the draws are piled against it, i.e.
+    when the gap from the outermost draw to the bound is smaller than the span of those 1 %
+    (the density does not fall off before the bound, so the interval holds the bound)."""
     x = np.sort(np.asarray(draws, dtype=float))
     n = x.size
     k = min(n, max(1, math.ceil(mass * n)))
     widths = x[k - 1:] - x[: n - k + 1]
     i = int(np.argmin(widths))
-    return float(x[i]), float(x[i + k - 1])
+    lo, hi = float(x[i]), float(x[i + k - 1])
+    edge = max(1, n // 100)
+    if i <= edge and x[0] - bounds[0] <= x[min(edge, n - 1)] - x[0]:
+        lo = float(bounds[0])
+    if n - (i + k) <= edge and bounds[1] - x[-1] <= x[-1] - x[max(n - 1 - edge, 0)]:
+        hi = float(bounds[1])
+    return lo, hi

@@ -28,6 +28,16 @@ def test_hdi_of_a_half_normal_piled_at_zero_starts_at_the_bound():
     assert np.percentile(x, 2.5) > 0.03  # the equal-tailed interval leaves the bound out
 
 
+def test_hdi_reaches_the_bound_only_when_the_draws_are_piled_against_it():
+    x = np.abs(np.random.default_rng(6).standard_normal(20_000))
+    assert hdi(x, 0.95, (0.0, 10.0))[0] == 0.0  # piled at 0: the bound itself
+    assert hdi(x, 0.95, (0.0, 10.0))[1] < 2.1  # the upper end: the density's, not 10
+    far = 5.0 + x  # piled at 5, the support's bound at 0: far from it
+    assert far.min() <= hdi(far, 0.95, (0.0, 10.0))[0] < 5.01  # not moved to 0
+    y = 20.0 - np.abs(np.random.default_rng(7).standard_normal(20_000))
+    assert hdi(y, 0.95, (3.0, 20.0))[1] == 20.0
+
+
 def test_hdi_of_a_symmetric_distribution_matches_the_equal_tailed_interval():
     x = np.random.default_rng(1).standard_normal(200_000)
     np.testing.assert_allclose(hdi(x, 0.95), np.percentile(x, [2.5, 97.5]), atol=0.03)
@@ -49,7 +59,7 @@ def test_summary_reports_the_hdi_in_the_sampling_coordinate_and_decides_on_it():
     s = cal.summary()
     f = s["fat_thickness_mm"]
     assert f["interval_kind"] == "hdi" and f["ci95"] == f["ci95_hdi"]
-    assert f["ci95"][0] == pytest.approx(3.0, abs=1e-3)  # holds a truth at the bound
+    assert f["ci95"][0] == 3.0  # holds a truth at the bound
     assert f["ci95_equal_tailed"][0] > 3.02
     assert f["ci95"][1] - f["ci95"][0] < f["ci95_equal_tailed"][1] - f["ci95_equal_tailed"][0]
     assert f["width_ratio"] == pytest.approx((f["ci95"][1] - 3.0) / (0.95 * 17.0), rel=0.02)
