@@ -249,6 +249,56 @@ def fit_surrogate_error(predictor, component: str) -> list[str]:
     return lines
 
 
+def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
+    """Whether the study's surrogate errors at the true inputs look like draws of the error
+    model: per measurement of the study (both noise levels' layouts) and output read, the
+    noise-free error e = ln(FE) - ln(surrogate) at the measured points, its Mahalanobis
+    distance delta under S = c^2 diag(s) C diag(s), and its probability integral transform,
+    F(delta / m; m, nu) for the Student-t (SURROGATE_ERROR_T), chi^2(delta; m) for the Gaussian
+    with the card's k: uniform on [0, 1] if the model describes the errors."""
+    from scipy import stats
+
+    from calibration.fit import SURROGATE_ERROR_T
+
+    k = surrogate_std_factor(predictor.card)
+    pit: dict[str, list[float]] = {"t": [], "gaussian": []}
+    for s in subjects:
+        grid = list(s["profile_distance_mm"])
+        for noise in NOISES:
+            rng = np.random.default_rng(1000 * int(s["id"]) + round(100 * noise))
+            m = synthetic_measurement(s, rel_noise=noise, n_points=int(rng.integers(5, 11)),
+                                      rng=rng, component=component,
+                                      sensor="ldv" if component == "normal" else None)
+            fwd = ForwardModel(predictor, m, FIT, s["design"])
+            freqs = list(s["frequencies_hz"])
+            fe = np.array([s["centre_um"][component][freqs.index(p.frequency_hz)]
+                           if p.reference == "centre" else
+                           s["profile_um"][component][freqs.index(p.frequency_hz)][
+                               grid.index(round(p.distance_m * 1e3, 6))] for p in m.points])
+            mean, sd = fwd.predict(np.array([[s["truth"][n] for n in FIT]]))
+            e = np.log(fe * 1e-6) - mean[0]
+            corr = fwd.error_correlation({o: ERROR_LENGTH_MM[o] for o in fwd.profile_outputs},
+                                         ERROR_FREQUENCY_HZ)
+            for g in fwd.groups:
+                ix = g.index
+                x = e[ix] / sd[0, ix]
+                delta = float(x @ np.linalg.solve(corr[np.ix_(ix, ix)], x))
+                t = SURROGATE_ERROR_T.get(g.output)
+                if t is not None:
+                    pit["t"].append(float(stats.f.cdf(delta / t["scale"] ** 2 / ix.size,
+                                                      ix.size, t["nu"])))
+                pit["gaussian"].append(float(stats.chi2.cdf(delta / k ** 2, ix.size)))
+    lines = []
+    for name, v in pit.items():
+        a = np.array(v)
+        q = np.histogram(a, bins=[0, 0.25, 0.5, 0.75, 1.0])[0] / max(a.size, 1)
+        lines.append(f"  {name}: {a.size} output blocks; PIT quartile fractions "
+                     + " ".join(f"{x:.2f}" for x in q)
+                     + f"; below 0.025 {np.mean(a < 0.025):.2f}, above 0.975 "
+                     f"{np.mean(a > 0.975):.2f} (uniform: 0.25 each; 0.025, 0.025)")
+    return lines
+
+
 def spread_swing(subjects: list[dict], predictor, ids: tuple[int, ...] = (0, 5)) -> list[str]:
     """How much the surrogate's spread, evaluated at each theta, moves the likelihood's
     normalising term -1/2 ln det(cov) along the fat thickness (3-20 mm, the true skin and loss)
@@ -341,6 +391,9 @@ def main() -> None:
     ap.add_argument("--surrogate-error", action="store_true",
                     help="only fit the Student-t of the surrogate's error (nu, scale) to its "
                     "held-out rows, per output the sensor kind reads")
+    ap.add_argument("--error-check", action="store_true",
+                    help="only check the surrogate's error at the true inputs of the study's "
+                    "measurements against the error model (probability integral transform)")
     ap.add_argument("--spread-swing", action="store_true",
                     help="only print how the spread at each theta moves the likelihood's "
                     "normalising term along the fat thickness (subjects 0 and 5)")
@@ -367,6 +420,12 @@ def main() -> None:
     if args.spread_swing:
         print("\n".join(spread_swing(json.loads(CACHE.read_text())["subjects"],
                                      predictors[sensors[0]])))
+        return
+    if args.error_check:
+        subjects = json.loads(CACHE.read_text())["subjects"][: args.subjects]
+        for s, predictor in predictors.items():
+            print(f"{s} ({predictor.card.get('name')}):")
+            print("\n".join(error_check(subjects, predictor, s)))
         return
     if args.surrogate_error:
         for s, predictor in predictors.items():
