@@ -261,7 +261,8 @@ def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
     from calibration.fit import SURROGATE_ERROR_T
 
     k = surrogate_std_factor(predictor.card)
-    pit: dict[str, list[float]] = {"t": [], "gaussian": []}
+    pit: dict[str, list[float]] = {"t": [], "gaussian": [], "t, one frequency": [],
+                                   "t, 2-3 frequencies": []}
     for s in subjects:
         grid = list(s["profile_distance_mm"])
         for noise in NOISES:
@@ -287,6 +288,8 @@ def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
                 if t is not None:
                     pit["t"].append(float(stats.f.cdf(delta / t["scale"] ** 2 / ix.size,
                                                       ix.size, t["nu"])))
+                    pit["t, one frequency" if len(freqs) == 1 else
+                        "t, 2-3 frequencies"].append(pit["t"][-1])
                 pit["gaussian"].append(float(stats.chi2.cdf(delta / k ** 2, ix.size)))
     lines = []
     for name, v in pit.items():
