@@ -26,9 +26,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from calibration_errors import error_check, fit_surrogate_error
 
 from calibration import calibrate, surrogate_std_factor
-from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, SPREADS
+from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
 from calibration.forward import ForwardModel
 from calibration.synthetic import synthetic_measurement
 from surrogate.runtime import load_predictor
@@ -72,8 +73,10 @@ def run(subjects: list[dict], predictor, *, component: str = "magnitude",
     return records
 
 
-def table(records: list[dict]) -> list[str]:
-    """The summary lines per sensor kind, fitted input and noise level (and over all)."""
+def table(records: list[dict], interval: str = "ci95") -> list[str]:
+    """The summary lines per sensor kind, fitted input and noise level (and over all);
+    coverage by the records' ``interval`` (``ci95``, the reported one; ``ci95_hdi`` or
+    ``ci95_equal_tailed``); "determined" is always the reported interval's."""
     lines = [f"{'sensor':9s} {'input':20s} {'noise':>5s} {'n':>4s} {'coverage':>9s} "
              f"{'determined':>10s} {'cov. det.':>14s} {'med |err|':>10s} "
              f"{'med |err|/range':>15s}"]
@@ -86,8 +89,8 @@ def table(records: list[dict]) -> list[str]:
         for sensor, noise in groups:
             rs = [r for r in records if (noise is None or r["noise"] == noise)
                   and sensor in ("all", r.get("sensor", "magnitude"))]
-            inside = [r["summary"][name]["ci95"][0] <= r["truth"][name]
-                      <= r["summary"][name]["ci95"][1] for r in rs]
+            inside = [r["summary"][name][interval][0] <= r["truth"][name]
+                      <= r["summary"][name][interval][1] for r in rs]
             det = [r["summary"][name]["identifiable"] for r in rs]
             cov_det = [i for i, d in zip(inside, det, strict=True) if d]
             err = [abs(r["summary"][name]["mean"] - r["truth"][name]) for r in rs]
@@ -231,6 +234,9 @@ def main() -> None:
                     "nn-default for magnitude, nn-normal for normal)")
     ap.add_argument("--spread", default="posterior", choices=SPREADS,
                     help="how the surrogate's spread enters the likelihood (calibration.fit)")
+    ap.add_argument("--error-model", default="t", choices=ERROR_MODELS,
+                    help="the surrogate's error: Student-t (SURROGATE_ERROR_T) or the Gaussian "
+                    "with the card's factor (calibration.fit)")
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--std-factor", type=float, default=None)
     ap.add_argument("--error-length-mm", type=float, default=None,
@@ -241,17 +247,26 @@ def main() -> None:
     ap.add_argument("--json", type=Path, help="write the records")
     ap.add_argument("--residuals", action="store_true",
                     help="only measure the surrogate's error structure on the residual subjects")
+    ap.add_argument("--surrogate-error", action="store_true",
+                    help="only fit the Student-t of the surrogate's error (nu, scale) to its "
+                    "held-out rows, per output the sensor kind reads")
+    ap.add_argument("--error-check", action="store_true",
+                    help="only check the surrogate's error at the true inputs of the study's "
+                    "measurements against the error model (probability integral transform)")
     ap.add_argument("--spread-swing", action="store_true",
                     help="only print how the spread at each theta moves the likelihood's "
                     "normalising term along the fat thickness (subjects 0 and 5)")
     ap.add_argument("--table", type=Path, nargs="+", metavar="JSON",
                     help="only print the table of records written by earlier runs (--json)")
+    ap.add_argument("--interval", default="ci95",
+                    choices=("ci95", "ci95_hdi", "ci95_equal_tailed"),
+                    help="with --table: the interval whose coverage is counted")
     ap.add_argument("--misses", action="store_true",
                     help="with --table: why the fat thickness's interval misses when determined")
     args = ap.parse_args()
     if args.table:
         records = [r for p in args.table for r in json.loads(p.read_text())]
-        print("\n".join(table(records)))
+        print("\n".join(table(records, args.interval)))
         if args.misses:
             kinds = sorted({r.get("sensor", "magnitude") for r in records})
             print("\n".join(misses(records, {s: load_predictor(args.model or MODELS[s])
@@ -265,6 +280,17 @@ def main() -> None:
         print("\n".join(spread_swing(json.loads(CACHE.read_text())["subjects"],
                                      predictors[sensors[0]])))
         return
+    if args.error_check:
+        subjects = json.loads(CACHE.read_text())["subjects"][: args.subjects]
+        for s, predictor in predictors.items():
+            print(f"{s} ({predictor.card.get('name')}):")
+            print("\n".join(error_check(subjects, predictor, s)))
+        return
+    if args.surrogate_error:
+        for s, predictor in predictors.items():
+            print(f"{s} ({predictor.card.get('name')}):")
+            print("\n".join(fit_surrogate_error(predictor, s)))
+        return
     if args.residuals:
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
@@ -277,10 +303,12 @@ def main() -> None:
     for s, predictor in predictors.items():
         records += run(subjects, predictor, component=s, steps=args.steps,
                        std_factor=args.std_factor, error_length_mm=args.error_length_mm,
-                       error_frequency_hz=args.error_frequency_hz, spread=args.spread)
+                       error_frequency_hz=args.error_frequency_hz, spread=args.spread,
+                       error_model=args.error_model)
     print(f"{len(subjects)} FE subjects x {len(NOISES)} noise levels x sensors "
           + ", ".join(f"{s} (model {p.card.get('name')})" for s, p in predictors.items())
-          + f", spread {args.spread}, {time.perf_counter() - t0:.0f} s in all")
+          + f", spread {args.spread}, error model {args.error_model}, "
+          f"{time.perf_counter() - t0:.0f} s in all")
     print("\n".join(table(records)))
     if args.json:
         args.json.write_text(json.dumps(records, indent=1) + "\n")

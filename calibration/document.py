@@ -25,12 +25,15 @@ __all__ = ["KIND", "SCHEMA_VERSION", "CalibrationFileError", "Tissue", "calibrat
 
 KIND = "hapticrom.calibration"
 SCHEMA_VERSION = 1
-LIKELIHOOD = ("ln y ~ N(ln mu(theta), diag((sigma_i/y_i)^2) + k^2 diag(s) C diag(s)): y the "
+LIKELIHOOD = ("ln y - ln mu(theta) = e + n, n ~ N(0, diag((sigma_i/y_i)^2)), per output read "
+              "e | lam ~ N(0, lam c^2 diag(s) C diag(s)), lam ~ InverseGamma(nu/2, nu/2) (a "
+              "multivariate Student-t; lam = 1, c = k for an output whose surrogate_error nu is "
+              "null: the Gaussian): y the "
               "measured peak displacement amplitudes, sigma_i their stated standard "
               "uncertainties, mu the surrogate's prediction, s its predictive log-std (95 % "
               "bounds exp(+-1.96 s); surrogate_spread 'posterior': s held fixed at its root-mean-"
-              "square over the late burn-in walkers, 'local': s at each theta), k the "
-              "surrogate's std factor, C the correlation of its "
+              "square over the late burn-in walkers, 'local': s at each theta), c and nu per "
+              "output in surrogate_error, k the surrogate's std factor, C the correlation of its "
               "errors: exp(-|d_i - d_j| / error_length_mm[output]) along a profile output times "
               "exp(-|f_i - f_j| / error_frequency_hz), none between points of different "
               "outputs (the face and the profile, the magnitude and the normal component)")
@@ -59,13 +62,14 @@ def statement(summary: dict[str, dict[str, Any]]) -> str:
 
 
 def calibration_document(cal: Calibration, *, model_path: str, tissue_names: list[str],
-                         seed: int = 0) -> dict[str, Any]:
-    """The versioned document of a fitted calibration."""
+                         seed: int = 0, interval: str = "hdi") -> dict[str, Any]:
+    """The versioned document of a fitted calibration (``interval``: the kind of the
+    reported ``ci95``, :data:`calibration.fit.INTERVAL_KINDS`)."""
     card = cal.forward.predictor.card
-    summary = cal.summary(seed)
+    summary = cal.summary(seed, interval=interval)
     m = cal.measurement
     mean, std = cal.forward.predict(np.array([[cal.mean_inputs()[n] for n in cal.names]]))
-    total = np.sqrt(cal.forward.rel_sigma ** 2 + (cal.std_factor * std[0]) ** 2)
+    total = np.sqrt(cal.forward.rel_sigma ** 2 + (cal.point_scale * std[0]) ** 2)
     resid = (cal.forward.y - mean[0]) / total
     point = {**{k: v for k, v in cal.forward.fixed.items() if k in tissue_names},
              **{k: _r(v) for k, v in cal.mean_inputs().items()}}
@@ -92,7 +96,10 @@ def calibration_document(cal: Calibration, *, model_path: str, tissue_names: lis
         "likelihood": {"text": LIKELIHOOD, "surrogate_std_factor": _r(cal.std_factor, 4),
                        "error_length_mm": cal.error_length_mm,
                        "error_frequency_hz": cal.error_frequency_hz,
-                       "surrogate_spread": cal.spread},
+                       "surrogate_spread": cal.spread,
+                       "surrogate_error": {o: {"nu": None if e["nu"] is None else _r(e["nu"], 4),
+                                               "scale": _r(e["scale"], 4)}
+                                           for o, e in cal.error_model.items()}},
         "sampler": {k: (_r(v, 4) if isinstance(v, float) else
                         [_r(x, 4) for x in v] if isinstance(v, list) else v)
                     for k, v in cal.sampler.items()},

@@ -1,22 +1,27 @@
 """The Bayesian fit: the posterior of chosen tissue inputs given a measurement, sampled with
 emcee's ensemble sampler on the run-time surrogate.
 
-Likelihood (docs/calibration.md): each measured amplitude y_i (peak displacement [m], converted
-by :mod:`calibration.measurement`) is log-normal about the surrogate's prediction mu_i(theta),
+Likelihood (docs/calibration.md, :mod:`calibration.likelihood`): each measured amplitude y_i
+(peak displacement [m], converted by :mod:`calibration.measurement`) is about the surrogate's
+prediction mu_i(theta) as
 
-    ln y ~ N(ln mu(theta), diag((sigma_i / y_i)^2) + k^2 diag(s) C diag(s)),
+    ln y - ln mu(theta) = e + n,  n ~ N(0, diag((sigma_i / y_i)^2)),
+    e | lam ~ N(0, lam c^2 diag(s) C diag(s)),  lam ~ InverseGamma(nu / 2, nu / 2) per output,
 
 with sigma_i the stated standard uncertainty (independent between points), s_i the
-surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), widened by ``k`` =
-:func:`surrogate_std_factor` where the model card's held-out coverage shows the bounds too
-narrow, and C the correlation of the surrogate's errors between points
+surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), nu and c per output
+read (:data:`SURROGATE_ERROR_T`: a multivariate Student-t fitted to the model's held-out
+rows; for an output not listed, or with ``error_model = "gaussian"`` or a given
+``std_factor``, lam = 1 and c = ``k`` = :func:`surrogate_std_factor`, the card's widening),
+and C the correlation of the surrogate's errors between points
 (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
 too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
 
 The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
 burn-in (over the starting walkers when there is no burn-in). Evaluated at every theta
-(``spread = "local"``, as before), the normalising term -1/2 ln det of the covariance moved
+(``spread = "local"``, as before), the normalising term -1/2 ln det of the (Gaussian's)
+covariance moved
 with the ensemble's spread: by 5.2 nats (a factor of about 180) along the fat thickness at
 fixed skin and loss for one synthetic subject (the ensemble has 5 members, so its spread is
 itself a noisy estimate), an implicit prior towards wherever the members happen to agree
@@ -40,11 +45,12 @@ from typing import Any
 import numpy as np
 
 from calibration.forward import ForwardModel
+from calibration.likelihood import hdi, mixture_log_likelihood
 from calibration.measurement import Measurement
 from calibration.priors import Prior, PriorError, priors_for
 
-__all__ = ["IDENTIFIABLE_WIDTH_RATIO", "SPREADS", "Calibration", "calibrate",
-           "surrogate_std_factor"]
+__all__ = ["ERROR_MODELS", "IDENTIFIABLE_WIDTH_RATIO", "INTERVAL_KINDS", "SPREADS",
+           "SURROGATE_ERROR_T", "Calibration", "calibrate", "surrogate_std_factor"]
 
 #: a parameter whose 95 % posterior interval is wider than this fraction of its prior's 95 %
 #: interval (in the sampling coordinate) is reported as not determined by the data
@@ -59,6 +65,20 @@ ERROR_LENGTH_MM = {"profile_um": 20.0, "profile_normal_um": 4.5}
 ERROR_FREQUENCY_HZ = 60.0
 #: how the surrogate's spread enters the likelihood (see the module docstring)
 SPREADS = ("posterior", "local")
+#: the surrogate's error per output read: a multivariate Student-t (calibration.likelihood),
+#: degrees of freedom ``nu`` and scale (of its predictive log-std) fitted by maximum likelihood
+#: to the held-out rows of its model's training data (the card's metrics' rows):
+#: ``python bench/bench_calibration.py --surrogate-error`` (nn-default for the magnitude
+#: outputs, nn-normal for the normal component). An output not listed: the Gaussian with the
+#: card's factor (:func:`surrogate_std_factor`).
+SURROGATE_ERROR_T = {"center_amplitude_um": {"nu": 2.18, "scale": 0.98},
+                     "profile_um": {"nu": 1.86, "scale": 0.541},
+                     "profile_normal_um": {"nu": 1.32, "scale": 0.706}}
+#: "t": SURROGATE_ERROR_T; "gaussian": the first versions' Gaussian widened by the card's k
+ERROR_MODELS = ("t", "gaussian")
+#: the reported 95 % interval: highest posterior density in the sampling coordinate (includes
+#: a prior bound the posterior piles against) or equal-tailed (2.5-97.5 percentiles)
+INTERVAL_KINDS = ("hdi", "equal_tailed")
 
 
 def surrogate_std_factor(card: Mapping[str, Any]) -> float:
@@ -89,6 +109,33 @@ class Calibration:
     error_length_mm: dict[str, float] = field(default_factory=dict)  # per profile output
     error_frequency_hz: float = ERROR_FREQUENCY_HZ
     spread: str = "posterior"
+    #: per output read: {"nu": degrees of freedom (None: Gaussian), "scale": of its log-std}
+    error_model: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    @property
+    def point_scale(self) -> np.ndarray:
+        """(m,) the factor on the surrogate's log-std at each measured point."""
+        return self.scale_for(self.forward)
+
+    def scale_for(self, fwd: ForwardModel) -> np.ndarray:
+        """The factor on the surrogate's log-std at each point ``fwd`` reads."""
+        c = np.full(fwd.y.size, self.std_factor)
+        for g in fwd.groups:
+            c[g.index] = self.error_model.get(g.output, {}).get("scale", self.std_factor)
+        return c
+
+    def surrogate_error_draws(self, fwd: ForwardModel, std: np.ndarray,
+                              rng: np.random.Generator) -> np.ndarray:
+        """Draws of the surrogate's error at the points ``fwd`` reads (rows of ``std`` (n, m),
+        its log-std at each draw): per output a common lam ~ InverseGamma(nu/2, nu/2) (1 for
+        the Gaussian) times independent normals of sd scale * std."""
+        e = self.scale_for(fwd) * std * rng.standard_normal(std.shape)
+        for g in fwd.groups:
+            nu = self.error_model.get(g.output, {}).get("nu")
+            if nu is not None:
+                lam = nu / rng.chisquare(nu, size=(std.shape[0], 1))
+                e[:, g.index] *= np.sqrt(lam)
+        return e
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -97,9 +144,16 @@ class Calibration:
     def z_samples(self) -> np.ndarray:
         return np.column_stack([p.to_z(self.samples[:, j]) for j, p in enumerate(self.priors)])
 
-    def summary(self, rng_seed: int = 0) -> dict[str, dict[str, Any]]:
-        """Per parameter: mean, median, sd, 95 % interval (2.5-97.5 percentiles), the prior's
-        95 % interval, the width ratio (in the sampling coordinate) and identifiability."""
+    def summary(self, rng_seed: int = 0, interval: str = "hdi") -> dict[str, dict[str, Any]]:
+        """Per parameter: mean, median, sd, the 95 % interval ``ci95`` of kind ``interval``
+        (:data:`INTERVAL_KINDS`: the highest-density interval of the draws in the sampling
+        coordinate, or the 2.5-97.5 percentiles; both are given, as ``ci95_hdi`` and
+        ``ci95_equal_tailed``), the prior's 95 % interval (equal-tailed: for a uniform prior
+        every 95 % interval is as wide), the width ratio of ``ci95`` to it (in the sampling
+        coordinate) and identifiability, decided on that ratio."""
+        if interval not in INTERVAL_KINDS:
+            raise PriorError("interval", f"interval {interval!r}: allowed "
+                             f"{', '.join(INTERVAL_KINDS)}")
         rng = np.random.default_rng(rng_seed)
         z = self.z_samples()
         out = {}
@@ -107,12 +161,14 @@ class Calibration:
             x = self.samples[:, j]
             prior_z = p.sample_z(20000, rng)
             pw = np.subtract(*np.percentile(prior_z, [97.5, 2.5]))
-            qw = np.subtract(*np.percentile(z[:, j], [97.5, 2.5]))
-            ratio = float(qw / pw) if pw > 0 else math.inf
+            zi = {"hdi": np.array(hdi(z[:, j], 0.95, p.z_bounds)),
+                  "equal_tailed": np.percentile(z[:, j], [2.5, 97.5])}
+            ratio = float((zi[interval][1] - zi[interval][0]) / pw) if pw > 0 else math.inf
+            ci = {k: [float(v) for v in p.from_z(v)] for k, v in zi.items()}
             out[p.name] = {
                 "unit": p.unit, "mean": float(x.mean()), "median": float(np.median(x)),
-                "sd": float(x.std(ddof=1)),
-                "ci95": [float(v) for v in np.percentile(x, [2.5, 97.5])],
+                "sd": float(x.std(ddof=1)), "ci95": ci[interval], "interval_kind": interval,
+                "ci95_hdi": ci["hdi"], "ci95_equal_tailed": ci["equal_tailed"],
                 "prior_ci95": [float(v) for v in p.from_z(np.percentile(prior_z, [2.5, 97.5]))],
                 "width_ratio": ratio, "identifiable": ratio <= IDENTIFIABLE_WIDTH_RATIO}
         return out
@@ -134,32 +190,7 @@ class Calibration:
         rng = np.random.default_rng(seed)
         pick = rng.choice(len(self.samples), size=min(n, len(self.samples)), replace=False)
         mean, std = self.forward.predict(self.samples[pick])
-        return mean, self.std_factor * std
-
-
-def _fixed_log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
-                          k: float, corr: np.ndarray) -> np.ndarray:
-    """As :func:`_log_likelihood` with one covariance for every row: ``std`` (m,) fixed."""
-    cov = (k * std)[:, None] * corr * (k * std)[None, :]
-    cov[np.arange(y.size), np.arange(y.size)] += rel ** 2
-    chol = np.linalg.cholesky(cov)
-    w = np.linalg.solve(chol, (y - mean).T)
-    logdet = 2.0 * np.sum(np.log(np.diagonal(chol)))
-    return -0.5 * (np.sum(w ** 2, axis=0) + logdet + y.size * np.log(2 * np.pi))
-
-
-def _log_likelihood(mean: np.ndarray, std: np.ndarray, y: np.ndarray, rel: np.ndarray,
-                    k: float, corr: np.ndarray) -> np.ndarray:
-    """Gaussian log-likelihood of ln y for each row of ``mean``/``std`` (n, m): covariance
-    diag(rel^2) + k^2 diag(std) corr diag(std), one batched Cholesky factorisation."""
-    ks = k * std
-    cov = ks[:, :, None] * corr[None, :, :] * ks[:, None, :]
-    cov[:, np.arange(y.size), np.arange(y.size)] += rel ** 2
-    chol = np.linalg.cholesky(cov)
-    r = (y - mean)[:, :, None]
-    w = np.linalg.solve(chol, r)[:, :, 0]
-    logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
-    return -0.5 * (np.sum(w ** 2, axis=1) + logdet + y.size * np.log(2 * np.pi))
+        return mean, self.point_scale * std
 
 
 def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
@@ -168,7 +199,7 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               seed: int = 0, std_factor: float | None = None,
               error_length_mm: float | None = None,
               error_frequency_hz: float = ERROR_FREQUENCY_HZ,
-              spread: str = "posterior") -> Calibration:
+              spread: str = "posterior", error_model: str = "t") -> Calibration:
     """Sample the posterior of the inputs ``fit`` (model input names) given ``measurement``.
 
     Inputs not fitted come from ``fixed``, then the measurement's ``site`` and ``design``
@@ -176,9 +207,13 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     (``NAME=KIND:A,B``), the rest default (:mod:`calibration.priors`). ``spread``: how the
     surrogate's spread enters the likelihood (:data:`SPREADS`, module docstring);
     ``error_length_mm``: one correlation length for every profile output, instead of
-    :data:`ERROR_LENGTH_MM`'s per output."""
+    :data:`ERROR_LENGTH_MM`'s per output. ``error_model``: :data:`ERROR_MODELS` (a given
+    ``std_factor`` means the Gaussian with that factor)."""
     if not 0 <= burn < steps:
         raise PriorError("steps", f"steps {steps} must exceed burn {burn} >= 0")
+    if error_model not in ERROR_MODELS:
+        raise PriorError("error_model", f"error_model {error_model!r}: allowed "
+                         f"{', '.join(ERROR_MODELS)}")
     if spread not in SPREADS:
         raise PriorError("spread", f"spread {spread!r}: allowed {', '.join(SPREADS)}")
     prs = priors_for(fit, predictor.specs, priors)
@@ -202,6 +237,16 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
                    if error_length_mm is None else float(error_length_mm))
                for o in fwd.profile_outputs}
     corr = fwd.error_correlation(lengths, error_frequency_hz)
+    t_model = error_model == "t" and std_factor is None
+    errors = {g.output: ({"nu": SURROGATE_ERROR_T[g.output]["nu"],
+                          "scale": SURROGATE_ERROR_T[g.output]["scale"]}
+                         if t_model and g.output in SURROGATE_ERROR_T else
+                         {"nu": None, "scale": k}) for g in fwd.groups}
+    scale = np.full(y.size, k)
+    blocks = []
+    for g in fwd.groups:
+        scale[g.index] = errors[g.output]["scale"]
+        blocks.append((g.index, errors[g.output]["nu"] or math.inf))
     fixed_std: list[np.ndarray] = []  # the surrogate's spread held fixed ("posterior")
 
     def x_of(z: np.ndarray) -> np.ndarray:
@@ -214,9 +259,10 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
         out = np.full(z.shape[0], -np.inf)
         if ok.any():
             mean, std = fwd.predict(x_of(z[ok]))
-            out[ok] = lp[ok] + (_fixed_log_likelihood(mean, fixed_std[-1], y, rel, k, corr)
-                                if fixed_std else
-                                _log_likelihood(mean, std, y, rel, k, corr))
+            cs = scale * (fixed_std[-1] if fixed_std else std)
+            cov = (cs[:, None] * corr * cs[None, :] if cs.ndim == 1 else
+                   cs[:, :, None] * corr[None] * cs[:, None, :])
+            out[ok] = lp[ok] + mixture_log_likelihood(y - mean, rel ** 2, cov, blocks)
         return out
 
     def rms_std(z: np.ndarray) -> np.ndarray:
@@ -268,4 +314,4 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
             "effective_samples": float(walkers * (steps - burn) / max(np.nanmax(tau), 1.0)),
             "wall_s": time.perf_counter() - t0}
     return Calibration(measurement, fwd, prs, samples, lps, k, info, lengths,
-                       error_frequency_hz, spread)
+                       error_frequency_hz, spread, errors)

@@ -38,13 +38,13 @@ def _dense(cal: Calibration, step_mm: float = 0.5) -> tuple[ForwardModel, list[t
 
 
 def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int = 200,
-                           seed: int = 0) -> None:
+                           seed: int = 0, interval: str = "hdi") -> None:
     """Write the figure (PNG) to ``path``."""
     fwd, tags = _dense(cal)
     rng = np.random.default_rng(seed)
     pick = rng.choice(len(cal.samples), size=min(n_draws, len(cal.samples)), replace=False)
     mean, std = fwd.predict(cal.samples[pick])
-    draws = mean + cal.std_factor * std * rng.standard_normal(mean.shape)
+    draws = mean + cal.surrogate_error_draws(fwd, std, rng)
     lo, mid, hi = (np.exp(np.percentile(draws, q, axis=0)) * 1e6 for q in (2.5, 50, 97.5))
     r_edge_mm = cal.forward.edge_radius_m * 1e3
     radius = np.array([0.0 if t[2] == "centre" else r_edge_mm + t[3] for t in tags])
@@ -75,10 +75,12 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
         ax.set_ylabel("peak displacement amplitude [um]")
         ax.legend(loc="upper right")
         figstyle.plain_log_ticks(ax)
-    summary = cal.summary(seed)
+    summary = cal.summary(seed, interval=interval)
     fitted = "; ".join(f"{n} {s['mean']:.3g} [{s['ci95'][0]:.3g}, {s['ci95'][1]:.3g}]"
                        + ("" if s["identifiable"] else " (not determined)")
                        for n, s in summary.items())
+    errors = ", ".join(f"Student-t nu {e['nu']:g}, x{e['scale']:.2f}" if e["nu"] is not None
+                       else f"Gaussian x{e['scale']:.2f}" for e in cal.error_model.values())
     design = ", ".join(f"{k} {v}" for k, v in cal.measurement.design.items()
                        if k in ("orientation", "attachment", "n_rings"))
     figstyle.annotate(
@@ -87,7 +89,7 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
         frequency=", ".join(f"{f:g} Hz" for f in cal.measurement.frequencies_hz),
         plotted="peak displacement amplitude [um] on the skin surface against distance from "
                 "the unit's centre; band: posterior predictive 95 % (tissue posterior and the "
-                f"surrogate's spread x{cal.std_factor:.2f})",
-        note=f"Posterior mean [95 % interval]: {fitted}. Model "
+                f"surrogate's error: {errors})",
+        note=f"Posterior mean [95 % {interval.replace('_', '-')} interval]: {fitted}. Model "
              f"{cal.forward.predictor.card.get('name')}.")
     figstyle.save(fig, path)

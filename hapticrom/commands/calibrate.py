@@ -97,7 +97,8 @@ def _run(args: argparse.Namespace) -> int:
                     walkers=args.walkers, steps=args.steps, burn=args.steps // 3,
                     seed=args.seed, std_factor=args.std_factor)
     tissue = [*fit, *measurement.site, *(k for k in sets if k not in measurement.design)]
-    doc = calibration_document(cal, model_path=args.model, tissue_names=tissue, seed=args.seed)
+    doc = calibration_document(cal, model_path=args.model, tissue_names=tissue, seed=args.seed,
+                               interval=args.interval)
     _print(doc, len(measurement.points))
     if args.verify:
         doc["verify"] = _verify(cal, args.model)
@@ -110,20 +111,29 @@ def _run(args: argparse.Namespace) -> int:
         from calibration.plot import write_calibration_plot
 
         with atomic_path(args.plot) as tmp:
-            write_calibration_plot(cal, tmp, seed=args.seed)
+            write_calibration_plot(cal, tmp, seed=args.seed, interval=args.interval)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _error_text(likelihood: dict[str, Any]) -> str:
+    """The surrogate's error model per output read, for the printout."""
+    return ", ".join(f"{o} Student-t nu {e['nu']:g} x{e['scale']:g}" if e["nu"] is not None
+                     else f"{o} Gaussian x{e['scale']:g}"
+                     for o, e in likelihood["surrogate_error"].items())
 
 
 def _print(doc: dict[str, Any], n_points: int) -> None:
     s = doc["sampler"]
     n_f = len({p["frequency_hz"] for p in doc["measurement"]["points"]})
     print(f"{n_points} measured points at {n_f} frequencies, model {doc['model']['name']} "
-          f"(surrogate spread x{doc['likelihood']['surrogate_std_factor']:g}); emcee "
+          f"(surrogate error {_error_text(doc['likelihood'])}); emcee "
           f"{s['walkers']} walkers x "
           f"{s['steps']} steps, acceptance {s['acceptance_fraction']:.2f}, autocorrelation "
           f"{max(s['autocorr_steps']):.0f} steps, {s['wall_s']:.1f} s")
-    print(f"  {'input':22s} {'mean':>9s} {'95 % interval':>22s} {'prior 95 %':>22s} "
+    kind = next(iter(doc["posterior"].values()))["interval_kind"]
+    print(f"  {'input':22s} {'mean':>9s} {'95 % ' + kind.replace('_', '-'):>22s} "
+          f"{'prior 95 %':>22s} "
           f"{'width':>6s}")
     for name, p in doc["posterior"].items():
         unit = f" {p['unit']}" if p["unit"] else ""
@@ -233,8 +243,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=_seed, default=0,
                    help="random seed, an integer in [0, 2^32) (0)")
     p.add_argument("--std-factor", type=number_in(0.0, 100.0), default=None, metavar="K",
-                   help="widen the surrogate's predictive log-std by K (default: from the "
-                   "card's held-out 95 %% coverage)")
+                   help="a Gaussian surrogate error, its predictive log-std widened by K, "
+                   "instead of the Student-t fitted to the model's held-out rows "
+                   "(docs/calibration.md)")
+    p.add_argument("--interval", choices=("hdi", "equal_tailed"), default="hdi",
+                   help="the reported 95 %% interval, on which 'determined' is decided: the "
+                   "highest posterior density (hdi, default) or the 2.5-97.5 percentiles; the "
+                   "document holds both")
     p.add_argument("--out", metavar="JSON", help="write the calibration document")
     p.add_argument("--plot", metavar="PNG", help="write the figure")
     p.add_argument("--verify", action="store_true",

@@ -41,12 +41,26 @@ def test_calibrate_writes_a_valid_document_and_figure(calibrated, capsys):
     lo, hi = doc["posterior"]["tissue_loss_factor"]["ci95"]
     assert lo < 0.22 < hi
     assert (calibrated / "cal.png").stat().st_size > 10_000
+    # the reported interval is the HDI, the equal-tailed one beside it; the t per output read
+    for p in doc["posterior"].values():
+        assert p["interval_kind"] == "hdi" and p["ci95"] == p["ci95_hdi"]
+        assert len(p["ci95_equal_tailed"]) == 2
+    err = doc["likelihood"]["surrogate_error"]
+    assert set(err) == {"center_amplitude_um", "profile_um"}
+    assert all(0 < e["nu"] < 10 and e["scale"] > 0 for e in err.values())
     # --verify: FE at the posterior mean, point by point, close to the surrogate and the data
     v = doc["verify"]
     assert len(v["points"]) == 14 and v["dofs"] > 1000
     assert v["median_abs_log_surrogate_vs_fe"] < 0.1
     for q in v["points"]:
         assert abs(q["fe_um"] / q["measured_um"] - 1) < 0.25
+
+
+def test_bad_interval_kind_exits_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "cal.json"
+    code = main(["calibrate", EXAMPLE, "--fit", FIT, "--interval", "median", "--out", str(out)])
+    assert code == 2 and not out.exists()
+    assert "--interval" in capsys.readouterr().err
 
 
 def test_bad_measurement_exits_2_and_writes_nothing(tmp_path, capsys):

@@ -7,14 +7,16 @@ held fixed."""
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from calibration.fit import _fixed_log_likelihood, _log_likelihood, calibrate
+from calibration.fit import calibrate
 from calibration.forward import ForwardModel
+from calibration.likelihood import mixture_log_likelihood
 from calibration.measurement import MeasurementError, measurement_from_rows, read_measurement
 from calibration.priors import PriorError
 from calibration.synthetic import REFERENCE_DESIGNS
@@ -138,9 +140,12 @@ def test_fixed_likelihood_equals_the_batched_one_at_the_same_spread():
     m = 6
     y, rel = rng.normal(size=m), rng.uniform(0.03, 0.1, m)
     corr = np.exp(-np.abs(np.subtract.outer(np.arange(m), np.arange(m))) / 3.0)
-    mean, s = rng.normal(size=(5, m)), rng.uniform(0.02, 0.1, m)
-    want = _log_likelihood(mean, np.tile(s, (5, 1)), y, rel, 1.4, corr)
-    np.testing.assert_allclose(_fixed_log_likelihood(mean, s, y, rel, 1.4, corr), want,
+    mean, s = rng.normal(size=(5, m)), 1.4 * rng.uniform(0.02, 0.1, m)
+    blocks = [(np.arange(4), 2.0), (np.arange(4, m), math.inf)]
+    fixed = s[:, None] * corr * s[None, :]
+    batched = np.tile(fixed, (5, 1, 1))
+    np.testing.assert_allclose(mixture_log_likelihood(y - mean, rel ** 2, fixed, blocks),
+                               mixture_log_likelihood(y - mean, rel ** 2, batched, blocks),
                                rtol=1e-12)
 
 
