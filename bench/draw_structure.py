@@ -16,7 +16,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-from bench.count_structure import ROOT, source_files
+from count_structure import ROOT, source_files  # a sibling: run as python bench/draw_structure.py
 
 #: Top (CLI) to ground, as the layers contract orders them; packages on one row share a layer.
 ROWS = (("hapticrom",), ("hardware",), ("planner", "calibration"), ("studies",),
