@@ -14,7 +14,7 @@ import numpy as np
 from surrogate.intervals import calibrate, coverage, residuals
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
-from surrogate.runtime.predictor import CALIBRATION_KEY, SCALAR_OUTPUTS, load_predictor
+from surrogate.runtime.predictor import CALIBRATION_KEY, load_predictor
 from surrogate.train import load_datasets, split
 
 __all__ = ["calibrate_model_dir"]
@@ -41,8 +41,7 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
     if len(paths) != len(sources):
         raise ValueError(f"--data: {len(paths)} datasets, the card names {len(sources)}")
     raw = load_predictor(root, calibrated=False)
-    extra = [name for name in raw.output_names
-             if name not in (*SCALAR_OUTPUTS, "profile_um", "edge_radius_mm")]
+    extra = list(raw.extra_outputs)
     rows = load_datasets(paths, outputs=extra)
     for p, s, now in zip(paths, sources, rows.sources, strict=True):
         if manifest_sha256(p) != s["manifest_sha256"] and (

@@ -33,7 +33,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LEVEL", "Z95", "calibrate", "coverage", "groups", "residuals"]
+__all__ = ["LEVEL", "Z95", "calibrate", "coverage", "groups", "normalised_residual",
+           "residuals"]
 
 LEVEL = 0.95
 Z95 = 1.959964
@@ -52,20 +53,26 @@ def groups(k: int, extra: Sequence[str] = ()) -> dict[str, list[int]]:
     return out
 
 
+def normalised_residual(truth: np.ndarray, value: np.ndarray, log_std: np.ndarray
+                        ) -> np.ndarray:
+    """|ln truth - ln value| / log_std: the error of a prediction ``value`` in units of its
+    predictive log-std (inside the 95 % interval when at most :data:`Z95`)."""
+    return np.abs(np.log(truth) - np.log(value)) / np.maximum(log_std, 1e-300)
+
+
 def residuals(pred: dict[str, np.ndarray], center_um: np.ndarray, profile_um: np.ndarray,
               extra_um: Mapping[str, np.ndarray] | None = None) -> np.ndarray:
     """(n, K) normalised residuals |ln y - mu| / sigma of every log output column, from a
     predictor's outputs (``pred``, raw log-std), the true center and profile [um] and the
     true extra profiles [um] by output name (``extra_um``, in the card's column order)."""
     extra_um = extra_um or {}
-    truth = np.column_stack([np.log(center_um), np.log(profile_um[:, 0]),
-                             np.log(profile_um[:, 0] / center_um), np.log(profile_um),
-                             *(np.log(y) for y in extra_um.values())])
+    truth = np.column_stack([center_um, profile_um[:, 0], profile_um[:, 0] / center_um,
+                             profile_um, *extra_um.values()])
     names = ["center_amplitude_um", "edge_amplitude_um", "normalized_edge", "profile_um",
              *extra_um]
-    mu = np.column_stack([np.log(pred[name]) for name in names])
-    sigma = np.column_stack([pred[f"{name}_log_std"] for name in names])
-    return np.abs(truth - mu) / np.maximum(sigma, 1e-300)
+    value = np.column_stack([pred[name] for name in names])
+    log_std = np.column_stack([pred[f"{name}_log_std"] for name in names])
+    return normalised_residual(truth, value, log_std)
 
 
 def calibrate(r: np.ndarray, level: float = LEVEL, extra: Sequence[str] = ()

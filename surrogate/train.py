@@ -30,7 +30,7 @@ from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.data.store import Store, profile_matrix
 from surrogate.data.worker import edge_radius_mm
 from surrogate.features import codes_from_frame, input_specs
-from surrogate.intervals import calibrate, residuals
+from surrogate.intervals import Z95, calibrate, normalised_residual, residuals
 from surrogate.kind import SurrogateKind
 from surrogate.pod import ProfileTargets, output_columns
 from surrogate.registry import (
@@ -205,17 +205,17 @@ def evaluate(pred: dict[str, np.ndarray], center_um: np.ndarray,
     out: dict[str, Any] = {}
     for name, y in truth.items():
         rel = np.abs(pred[name] / y - 1.0)
-        z = np.abs(np.log(y) - np.log(pred[name])) / np.maximum(pred[f"{name}_log_std"], 1e-300)
+        z = normalised_residual(y, pred[name], pred[f"{name}_log_std"])
         out[name] = {"median_rel_err": float(np.median(rel)),
                      "p95_rel_err": float(np.percentile(rel, 95)),
-                     "coverage95": float(np.mean(z <= 1.959964))}
+                     "coverage95": float(np.mean(z <= Z95))}
     l2 = np.linalg.norm(pred["profile_um"] - profile_um, axis=1) / np.linalg.norm(profile_um,
                                                                                  axis=1)
     out["profile_um"] = {"median_rel_l2": float(np.median(l2)),
                          "p95_rel_l2": float(np.percentile(l2, 95))}
     for name, y in (extra_um or {}).items():
         rel = np.abs(pred[name] / y - 1.0)
-        z = np.abs(np.log(y) - np.log(pred[name])) / np.maximum(pred[f"{name}_log_std"], 1e-300)
+        z = normalised_residual(y, pred[name], pred[f"{name}_log_std"])
         l2 = np.linalg.norm(pred[name] - y, axis=1) / np.linalg.norm(y, axis=1)
         out[name] = {"median_rel_err": float(np.median(rel)),
                      "p95_rel_err": float(np.percentile(rel, 95)),
@@ -223,7 +223,7 @@ def evaluate(pred: dict[str, np.ndarray], center_um: np.ndarray,
                      "max_rel_err": float(rel.max()),
                      "median_rel_l2": float(np.median(l2)),
                      "p95_rel_l2": float(np.percentile(l2, 95)),
-                     "coverage95": float(np.mean(z <= 1.959964))}
+                     "coverage95": float(np.mean(z <= Z95))}
     return out
 
 

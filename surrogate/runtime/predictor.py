@@ -180,6 +180,8 @@ class Predictor:
                                                               for j in range(m))]), m)
         self.n_log_outputs = sum(1 if isinstance(v, int) else m for v in self._layout.values())
         self.output_names: tuple[str, ...] = (*self._layout, "edge_radius_mm")
+        #: profile outputs beyond ``profile_um`` (e.g. ``profile_normal_um``), in column order
+        self.extra_outputs: tuple[str, ...] = tuple(list(self._layout)[4:])
         self.kind = str(card.get("kind", ""))
         self.session = session
         self._dtype = _DTYPES[card["graph"]["dtype"]]

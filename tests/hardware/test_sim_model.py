@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -11,14 +9,9 @@ from hardware.protocol import Segment
 from hardware.sim import envelopes, model_envelopes
 from planner.timing import envelope_timing, rom_response, voltage_for_frequency
 from surrogate.runtime.rom import load_envelope_model
+from tests.surrogate.rom_cases import DESIGN, SHIPPED
 
-ROOT = Path(__file__).resolve().parents[2]
-MODEL = ROOT / "models" / "rom-default"
-DESIGN = {"orientation": "reverse", "attachment": "glued", "n_rings": 2,
-          "ring_1_E_kPa": 150.0, "ring_2_E_kPa": 150.0, "ring_3_E_kPa": 150.0,
-          "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08,
-          "skin_E_kPa": 49.0, "fat_thickness_mm": 10.0, "tissue_loss_factor": 0.3,
-          "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
+MODEL = SHIPPED
 
 
 @pytest.fixture(scope="module")

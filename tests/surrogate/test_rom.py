@@ -9,7 +9,6 @@ import math
 import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,16 +23,10 @@ from surrogate.runtime.rom import (
     mode_response,
     motor_speed,
 )
+from tests.surrogate.rom_cases import DESIGN, ROOT, SHIPPED
 
-ROOT = Path(__file__).resolve().parents[2]
-SHIPPED = ROOT / "models" / "rom-default"
 DATASET = ROOT / "datasets" / "transient"
 MOTOR = SpeedLaw()
-DESIGN = {"orientation": "reverse", "attachment": "glued", "n_rings": 2,
-          "ring_1_E_kPa": 150.0, "ring_2_E_kPa": 150.0, "ring_3_E_kPa": 150.0,
-          "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08,
-          "skin_E_kPa": 49.0, "fat_thickness_mm": 10.0, "tissue_loss_factor": 0.3,
-          "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
 
 
 @pytest.fixture(scope="module")

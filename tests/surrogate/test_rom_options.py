@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,19 +13,14 @@ import pytest
 from motorlaw import SpeedLaw
 from surrogate.rom_metrics import envelope_metrics, summarise
 from surrogate.runtime.rom import load_envelope_model, motor_speed
+from tests.surrogate.rom_cases import DESIGN, SHIPPED
 
-ROOT = Path(__file__).resolve().parents[2]
 MOTOR = SpeedLaw()
-DESIGN = {"orientation": "reverse", "attachment": "glued", "n_rings": 2,
-          "ring_1_E_kPa": 150.0, "ring_2_E_kPa": 150.0, "ring_3_E_kPa": 150.0,
-          "ring_density_kg_m3": 1070.0, "ring_nu": 0.47, "ring_loss_factor": 0.08,
-          "skin_E_kPa": 49.0, "fat_thickness_mm": 10.0, "tissue_loss_factor": 0.3,
-          "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
 
 
 @pytest.fixture(scope="module")
 def model():
-    return load_envelope_model(ROOT / "models" / "rom-default")
+    return load_envelope_model(SHIPPED)
 
 
 def _synthetic_runs(model, truths):
