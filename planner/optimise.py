@@ -57,8 +57,8 @@ from planner.prepare import prepare
 from planner.region import largest_array, largest_pitch
 from planner.timing import plan_timing
 
-__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "array_positions", "loads", "plan_layout",
-           "smallest_pitch", "worst_load"]
+__all__ = ["PITCH_TOL_MM", "DesignResult", "Plan", "array_positions", "judge", "loads",
+           "plan_layout", "ranked", "shaped_request", "smallest_pitch", "worst_load"]
 
 PITCH_TOL_MM = 0.01
 Z95 = 1.959964
@@ -230,7 +230,7 @@ def _key(r: DesignResult, free: bool) -> tuple[float, ...]:
     return (sites, (r.load if free else r.pitch_mm), -own)  # type: ignore[return-value]
 
 
-def _shaped(req: LayoutRequest, r: DesignResult) -> LayoutRequest:
+def shaped_request(req: LayoutRequest, r: DesignResult) -> LayoutRequest:
     """The request with the candidate's grid shape (max_sites), else as it is."""
     return req if r.shape is None else replace(req, rows=r.shape[0], cols=r.shape[1])
 
@@ -281,7 +281,7 @@ def _check_overlap(req: LayoutRequest, results: list[DesignResult]) -> None:
 
 def _evaluate(req: LayoutRequest, design: dict[str, Any], freq: float, k: int,
               prep: Any) -> DesignResult:
-    """One candidate: its nominal and bound fields, pitches and load."""
+    """One candidate: its nominal and bound fields from the prediction, then :func:`judge`."""
     out, grid = prep.out, prep.predictor.profile_distance_mm
     center, profile = out["center_amplitude_um"][k], out["profile_um"][k]
     s_c, s_p = out["center_amplitude_um_log_std"][k], out["profile_um_log_std"][k]
@@ -289,6 +289,22 @@ def _evaluate(req: LayoutRequest, design: dict[str, Any], freq: float, k: int,
     nominal = UnitField(float(center), edge, grid, profile)
     bound = UnitField(float(center * np.exp(-Z95 * s_c)), edge, grid,
                       profile * np.exp(Z95 * s_p), floor=nominal)
+    ex = prep.extrapolations[k]
+    flagged = bool(ex) or ("extrapolated" in out and bool(out["extrapolated"][k]))
+    r = DesignResult(
+        design["name"], freq, dict(design["inputs"]), float(center), edge, float(s_c),
+        float(s_p.max()), flagged, None, None, nominal, bound,
+        edge_um=float(out["edge_amplitude_um"][k]),
+        family=design.get("family", design["name"]), extrapolations=list(ex))
+    return judge(req, r)
+
+
+def judge(req: LayoutRequest, r: DesignResult) -> DesignResult:
+    """``r`` judged on its fields (``unit``, ``bound``) under the request's criterion: whether
+    it is felt, its shape (max_sites), nominal and 95 % pitches, worst load and the leakage
+    share beyond the profile (the one criterion code of the plan; ``plan --verify`` judges
+    an FE field with it, the field as both nominal and bound)."""
+    freq, nominal, bound = r.frequency_hz, r.unit, r.bound
     holds_at = req.criterion.holds_at
     decide = bound if holds_at == "bounds_95" else nominal
     felt = is_felt(decide.center_um, req, freq)
@@ -297,22 +313,23 @@ def _evaluate(req: LayoutRequest, design: dict[str, Any], freq: float, k: int,
     p_95 = smallest_pitch(bound, shaped, freq) if shaped else None
     if p_95 is not None and p_nom is not None:
         p_95 = max(p_95, p_nom)  # the bounds never ask for less room than the prediction
-    ex = prep.extrapolations[k]
-    flagged = bool(ex) or ("extrapolated" in out and bool(out["extrapolated"][k]))
-    r = DesignResult(
-        design["name"], freq, dict(design["inputs"]), float(center), edge, float(s_c),
-        float(s_p.max()), flagged, p_nom, p_95, nominal, bound, felt,
-        float(out["edge_amplitude_um"][k]), family=design.get("family", design["name"]),
-        shape=None if shaped is None or req.objective != "max_sites" else
-        (shaped.rows, shaped.cols), holds_at=holds_at, extrapolations=list(ex))
+    r = replace(r, felt=felt, pitch_nominal_mm=p_nom, pitch_95_mm=p_95, holds_at=holds_at,
+                shape=None if shaped is None or req.objective != "max_sites" else
+                (shaped.rows, shaped.cols), load=None, beyond_profile=0.0)
     if r.pitch_mm is not None:
-        shaped_req = _shaped(req, r)
+        shaped_req = shaped_request(req, r)
         pos = array_positions(shaped_req, r.pitch_mm)
         r.load = worst_load(decide, shaped_req, r.pitch_mm, freq)
         if len(pos) > 1:
             worst = int(np.argmax(loads(crosstalk_matrix(decide, pos), shaped_req, freq)))
             r.beyond_profile = beyond_profile_share(decide, pos, worst)
     return r
+
+
+def ranked(results: list[DesignResult], free: bool) -> list[DesignResult]:
+    """The feasible candidates, best first (:func:`_key`: most sites, then the smallest
+    pitch, or with free positions the smallest worst load, then the larger own amplitude)."""
+    return sorted((r for r in results if r.pitch_mm is not None), key=lambda r: _key(r, free))
 
 
 def _playable(req: LayoutRequest, ranked: list[DesignResult], rom: Any
@@ -323,7 +340,7 @@ def _playable(req: LayoutRequest, ranked: list[DesignResult], rom: Any
     for r in ranked:
         if not req.timing.enabled:
             return r, None, skipped
-        timing = plan_timing(_shaped(req, r), r, model=rom)
+        timing = plan_timing(shaped_request(req, r), r, model=rom)
         if not timing.get("unavailable"):
             return r, timing, skipped
         skipped.append({"name": r.name, "frequency_hz": r.frequency_hz,
@@ -341,10 +358,9 @@ def plan_layout(req: LayoutRequest) -> Plan:
     free = req.positions_mm is not None
     if free:
         _check_overlap(req, results)
-    ranked = sorted((r for r in results if r.pitch_mm is not None), key=lambda r: _key(r, free))
-    best, timing, skipped = _playable(req, ranked, prep.rom)
+    best, timing, skipped = _playable(req, ranked(results, free), prep.rom)
     if best is not None:
-        req = _shaped(req, best)
+        req = shaped_request(req, best)
     result = Plan(req, results, best, timing=timing, domain=prep.domain,
                   dropped=prep.dropped, unplayable=skipped,
                   profile_end_mm=float(prep.predictor.profile_distance_mm[-1]))

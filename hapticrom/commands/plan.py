@@ -1,20 +1,20 @@
 """``hapticrom plan LAYOUT.toml``: lay out an array on the shipped surrogate.
 
     hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
-    hapticrom plan examples/forearm-layout.toml --verify     # re-solve the winner with FE
+    hapticrom plan examples/forearm-layout.toml --verify     # FE re-plan of the top 5
+    hapticrom plan examples/forearm-layout.toml --verify-top 3
 
-``--verify`` builds the winning design's scene exactly as the model's training data did (the
-dataset's own parameter space maps model inputs to a scene, ``Space.resolve``; inputs the
-model does not take keep the space's centre values, as the fixed ones do), solves it with the
-FE solver (``surrogate.data.worker.run_sample``, the dataset's mesh settings) and compares
-centre and edge amplitude, and the pitch each profile implies under the same criterion. Its
-verdict uses the plan's own criterion: the FE criterion load at the planned pitch above 1 is a
-failure, printed with the pitch the FE needs.
+``--verify`` re-solves the top K candidates of the surrogate's ranking with the FE solver, each
+scene built exactly as the model's training data was (:mod:`hapticrom.commands.plan_verify`),
+judges and re-ranks them on the FE fields with the plan's own criterion
+(:mod:`planner.verify`) and reports whether the FE's winner (design and frequency) and its
+pitch agree with the surrogate's.
 
 Exit codes: 0 a plan (and, with ``--verify``, the FE confirms it); 1 no design meets the
-criterion (or none is playable); 2 bad input, nothing written; 3 ``--verify``: the FE
-refutes the plan (criterion load above 1 at the planned pitch, or the unit not felt); the plan
-is still written, with the verdict under ``verify``.
+criterion (or none is playable); 2 bad input, nothing written (``--verify-top`` outside 1-32
+too); 3 ``--verify``: the FE refutes the plan (its winner among the top K differs, or the
+winner's pitch is more than 2 % off the FE's, or the criterion fails at the FE field at the
+planned pitch); the plan is still written, with the verdict under ``verify``.
 
 ``--out`` stores the model paths relative to the plan file (:mod:`planner.paths`), so the plan
 plays from any directory.
@@ -25,16 +25,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from hapticrom.commands.plan_verify import EXIT_VERIFY_FAILED, print_verify, top_k, verify_plan
 from hapticrom.outputs import atomic_path, check_output_file
 
 __all__ = ["EXIT_VERIFY_FAILED", "register"]
-
-EXIT_VERIFY_FAILED = 3  # --verify: the FE solve refutes the plan
 
 
 def _header(plan: Any) -> str:
@@ -124,6 +120,7 @@ def _run(args: argparse.Namespace) -> int:
     from planner import load_layout, plan_as_record, plan_layout, write_plan_plot
     from planner.paths import relative_plan_models
     from planner.plan_record import PlanRecord
+    from planner.verify import DEFAULT_TOP
 
     for opt in ("out", "plot"):
         if getattr(args, opt):
@@ -135,18 +132,20 @@ def _run(args: argparse.Namespace) -> int:
         tissue = load_tissue(args.tissue)
         req = apply_tissue(req, tissue)
     plan = plan_layout(req)
+    check = args.verify or args.verify_top is not None
     try:
-        verify = _verify(plan) if args.verify and plan.best is not None else None
+        verify = (verify_plan(plan, args.verify_top or DEFAULT_TOP)
+                  if check and plan.best is not None else None)
     except RuntimeError as err:  # the FE solve itself failed: said, no traceback, nothing written
         print(f"hapticrom plan: failed: {err}", file=sys.stderr)
         return 1
     _print_plan(plan)
     spread = _print_tissue(plan, tissue) if tissue is not None else None
     if verify is not None:
-        _print_verify(verify)
+        print_verify(verify)
     if args.out:
         doc = relative_plan_models(plan_as_record(plan).to_dict(), args.out)
-        record = PlanRecord(**doc, verify=verify if args.verify else None,
+        record = PlanRecord(**doc, verify=verify,
                             tissue=spread if tissue is not None else None)
         with atomic_path(args.out) as tmp:
             tmp.write_text(json.dumps(record.to_json(), indent=1) + "\n")
@@ -157,88 +156,7 @@ def _run(args: argparse.Namespace) -> int:
         print(f"wrote {args.plot}")
     if plan.best is None:
         return 1
-    return EXIT_VERIFY_FAILED if verify is not None and not verify["holds"] else 0
-
-
-def _dataset_path(model: str) -> Path:
-    """The model's training dataset (the card's path, relative to the working directory or
-    to the repository holding ``models/NAME``)."""
-    from surrogate.runtime.card import read_card
-
-    card = read_card(model)
-    rel = Path(card["training_data"][0]["path"])
-    for base in (Path.cwd(), Path(model).resolve().parents[1]):
-        if (base / rel).is_dir():
-            return base / rel
-    raise FileNotFoundError(f"--verify: the model's training dataset {str(rel)!r} was not found "
-                            "(its parameter space builds the FE scene)")
-
-
-def _verify(plan: Any) -> dict[str, Any]:
-    """FE re-solve of the chosen design; surrogate vs FE amplitudes and implied pitches, and
-    the verdict on the plan's own criterion at the planned pitch."""
-    from planner.crosstalk import UnitField
-    from planner.optimise import is_felt, smallest_pitch, worst_load
-    from surrogate.data.store import Store
-    from surrogate.data.worker import run_sample
-
-    req, best = plan.request, plan.best
-    space = Store.open(_dataset_path(req.model)).space
-    row = {**space.center(), **req.site, **best.inputs, "frequency_hz": best.frequency_hz}
-    out = run_sample(space.resolve(row))
-    if out["status"] != "ok":
-        raise RuntimeError(f"--verify: the FE solve failed: {out['error']}")
-    fe = UnitField(float(out["center_amplitude_um"]), float(out["edge_radius_mm"]),
-                   np.asarray(out["profile_distance_mm"], dtype=float),
-                   np.maximum(np.asarray(out["profile_magnitude_um"], dtype=float), 1e-12))
-    felt = is_felt(fe.center_um, req, best.frequency_hz)
-    fe_pitch = smallest_pitch(fe, req, best.frequency_hz) if felt else None
-    load = worst_load(fe, req, best.pitch_mm, best.frequency_hz)
-    holds = felt and load <= 1.0
-    return {
-        "design": best.name, "frequency_hz": best.frequency_hz,
-        "edge_radius_mm": round(best.edge_radius_mm, 4), "holds": holds,
-        "criterion": req.criterion.kind,
-        "surrogate": {"center_um": round(best.center_um, 4),
-                      "edge_um": round(best.edge_um, 4),
-                      "pitch_mm": round(best.pitch_mm, 3),
-                      "pitch_nominal_mm": None if best.pitch_nominal_mm is None else
-                      round(best.pitch_nominal_mm, 3), "holds_at": best.holds_at},
-        "fe": {"center_um": round(fe.center_um, 4),
-               "edge_um": round(float(out["edge_amplitude_um"]), 4),
-               "pitch_mm": None if fe_pitch is None else round(fe_pitch, 3),
-               "criterion_load_at_plan_pitch": round(load, 4), "felt": felt,
-               "profile_end_from_edge_mm": float(fe.distance_mm[-1]),
-               "dofs": int(out["dofs"]), "wall_s": round(float(out["wall_s"]), 2)},
-        "scene_inputs": {k: row[k] for k in sorted(row)},
-    }
-
-
-def _print_verify(v: dict[str, Any]) -> None:
-    s, f = v["surrogate"], v["fe"]
-    fe_pitch = "none within the pitch bounds" if f["pitch_mm"] is None else \
-        f"{f['pitch_mm']:.2f} mm"
-    print(f"verify ({v['design']} at {v['frequency_hz']:g} Hz, FE {f['dofs']} dofs, "
-          f"{f['wall_s']:.1f} s):")
-    print(f"  center  surrogate {s['center_um']:7.3f} um   FE {f['center_um']:7.3f} um "
-          f"({s['center_um'] / f['center_um'] - 1:+.1%})")
-    print(f"  edge    surrogate {s['edge_um']:7.3f} um   FE {f['edge_um']:7.3f} um "
-          f"({s['edge_um'] / f['edge_um'] - 1:+.1%})")
-    print(f"  pitch   planned {s['pitch_mm']:7.2f} mm   FE needs {fe_pitch}")
-    load = f["criterion_load_at_plan_pitch"]
-    end = f.get("profile_end_from_edge_mm")
-    if end is not None and s["pitch_mm"] - v["edge_radius_mm"] > end:
-        print(f"  (the FE profile ends {end:g} mm from the unit's edge too: beyond it the FE "
-              "side also uses the log-slope extension)")
-    if v["holds"]:
-        print(f"  verdict: HOLDS on the FE: criterion load {load:.3f} <= 1 at the planned "
-              f"pitch {s['pitch_mm']:.2f} mm")
-    elif not f["felt"]:
-        print("  verdict: FAILS on the FE: the unit's own FE amplitude is below the detection "
-              "threshold (it would not be felt)")
-    else:
-        print(f"  verdict: FAILS on the FE: criterion load {load:.3f} > 1 at the planned pitch "
-              f"{s['pitch_mm']:.2f} mm; the FE needs {fe_pitch} (exit {EXIT_VERIFY_FAILED})")
+    return EXIT_VERIFY_FAILED if verify is not None and not verify["confirmed"] else 0
 
 
 def _print_uncertainty(plan: object) -> None:
@@ -304,9 +222,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "to it)")
     p.add_argument("--plot", metavar="PNG", help="write the layout and profiles figure")
     p.add_argument("--verify", action="store_true",
-                   help="re-solve the winning design with the FE solver (about a second) and "
-                   "judge the plan on it with the same criterion (written into the plan under "
+                   help="re-solve the surrogate's top candidates with the FE solver (about a "
+                   "second each), re-rank them on the FE fields with the same criterion and "
+                   "report whether the winner and its pitch agree (written into the plan under "
                    f"'verify'; exit {EXIT_VERIFY_FAILED} when the FE refutes it)")
+    p.add_argument("--verify-top", metavar="K", type=top_k, default=None,
+                   help="--verify re-solves the top K candidates of the surrogate's ranking "
+                   "(integer 1-32, default 5; implies --verify)")
     p.add_argument("--tissue", metavar="CALIBRATION",
                    help="plan for a person: the tissue of a `hapticrom calibrate` document, its "
                    "posterior uncertainty carried into the pitch (planner.tissue)")
