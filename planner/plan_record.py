@@ -45,6 +45,7 @@ FREQUENCY_HZ = (0.0, 1e4)  # drive frequency (the layout's bound) [Hz]
 AMPLITUDE_UM = 1e4  # any skin amplitude [um] (1 cm: far beyond any ERM)
 TIME_MS = 1e4  # any timing entry [ms] (an ERM settles in tens of ms)
 VOLTAGE_V = 50.0  # any drive voltage [V] (the scene's rated-voltage bound)
+MAX_VERIFY_TOP = 32  # verify.top_k: candidates re-solved with the FE, at most
 LEVEL = (1.0, 8.0)  # overdrive_level: a multiple of the nominal drive (the protocol's range)
 
 #: timing key -> (low, high, low inclusive); a number or null (timing unavailable)
@@ -186,6 +187,7 @@ def _check_numbers(d: dict[str, Any]) -> None:
             _num(crit["drive_level"], "criterion.drive_level", 0.0, 10.0, False)
         if "max_ratio" in crit:
             _num(crit["max_ratio"], "criterion.max_ratio", 0.0, 1.0, False)
+    _check_verify(d.get("verify"))
     t = d.get("timing")
     if isinstance(t, dict):
         for key, (lo, hi, lo_incl) in TIMING_RANGES.items():
@@ -196,6 +198,29 @@ def _check_numbers(d: dict[str, Any]) -> None:
                                   "a text saying why")
     elif t is not None:
         raise PlanRecordError("timing", "plan.timing: expected an object or null")
+
+
+def _check_verify(v: Any) -> None:
+    """``verify`` (``plan --verify``): an object or null; its frequencies, counts and verdict
+    flags typed (a block written before the re-ranking has only the winner's keys)."""
+    if v is None:
+        return
+    if not isinstance(v, dict):
+        raise PlanRecordError("verify", "plan.verify: expected an object or null")
+    if "frequency_hz" in v:
+        _num(v["frequency_hz"], "verify.frequency_hz", *FREQUENCY_HZ, False)
+    for key in ("holds", "winner_agrees", "within_tolerance", "confirmed"):
+        if key in v and not isinstance(v[key], bool):
+            raise PlanRecordError(f"verify.{key}", f"plan.verify.{key} = {v[key]!r}: expected "
+                                  "true or false")
+    if "top_k" in v:
+        _num(v["top_k"], "verify.top_k", 1, MAX_VERIFY_TOP)
+    for i, c in enumerate(_list(v.get("candidates", []), "verify.candidates")):
+        if not isinstance(c, dict):
+            raise PlanRecordError(f"verify.candidates[{i}]", f"plan.verify.candidates[{i}]: "
+                                  "expected an object")
+        _num(c.get("frequency_hz"), f"verify.candidates[{i}].frequency_hz", *FREQUENCY_HZ,
+             False)
 
 
 def check_plan(d: Any, schema: dict[str, Any] | None = None) -> PlanCheck:
@@ -262,6 +287,15 @@ class PlanRecord:
     tissue: dict[str, Any] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     check: PlanCheck | None = field(default=None, compare=False)
+
+    @property
+    def verify_confirmed(self) -> bool | None:
+        """The FE's verdict of ``plan --verify``: True (confirmed), False (refuted), None
+        without one or for a ``verify`` block written before the top-K re-ranking (it
+        judged the criterion alone: ``verify["holds"]``)."""
+        v = self.verify
+        return None if not isinstance(v, dict) or "confirmed" not in v else bool(
+            v["confirmed"])
 
     def to_dict(self) -> dict[str, Any]:
         """The plan's content, not yet sealed (``verify``/``tissue`` only when present)."""

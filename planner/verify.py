@@ -36,12 +36,13 @@ from typing import Any
 
 from planner.crosstalk import UnitField
 from planner.optimise import DesignResult, Plan, judge, ranked, shaped_request, worst_load
+from planner.plan_record import MAX_VERIFY_TOP
 
 __all__ = ["DEFAULT_TOP", "MAX_TOP", "PITCH_TOLERANCE", "FeSolve", "fe_judged", "rerank",
            "surrogate_ranking"]
 
 DEFAULT_TOP = 5  # candidates re-solved by default
-MAX_TOP = 32  # at most (one FE solve each, about 1 s)
+MAX_TOP = MAX_VERIFY_TOP  # at most 32 (one FE solve each, about 1 s)
 PITCH_TOLERANCE = 0.02  # |surrogate / FE - 1| of the winner's compared value, at most
 
 

@@ -77,8 +77,9 @@ def test_the_thigh_layouts_plan_verify_and_play_with_true_verdicts(tmp_path, cap
     load = v["fe"]["criterion_load_at_plan_pitch"]
     # the verdict is the criterion's on the FE, and the exit code says it
     assert v["holds"] is (load <= 1.0 and v["fe"]["felt"])
-    assert code == (0 if v["holds"] else 3)
-    assert ("verdict: HOLDS" in out) is v["holds"] and ("verdict: FAILS" in out) is not v["holds"]
+    assert code == (0 if v["confirmed"] else 3) and (v["holds"] or not v["confirmed"])
+    assert ("criterion: HOLDS" in out) is v["holds"]
+    assert ("criterion: FAILS" in out) is not v["holds"]
     assert doc["dropped_frequencies"][0]["frequency_hz"] == 170.0
     assert doc["best_frequency_hz"] < 170.0 and not doc["timing"].get("unavailable")
     assert doc["uncertainty"]["criterion_holds_at_95"] is True

@@ -27,17 +27,24 @@ def test_a_load_above_one_on_the_fe_fails_with_its_own_exit_code(tmp_path, capsy
     load = v["fe"]["criterion_load_at_plan_pitch"]
     assert load > 1.0 and v["holds"] is False
     assert code == EXIT_VERIFY_FAILED == 3
-    assert "verdict: FAILS on the FE" in out and f"criterion load {load:.3f} > 1" in out
+    assert "criterion: FAILS on the FE" in out and f"criterion load {load:.3f} > 1" in out
+    assert v["confirmed"] is False and "verdict: REFUTED" in out
+    assert any("the criterion fails at the FE field" in r for r in v["refuted_because"])
     # the pitch the FE needs, on the same criterion, is longer than the planned one
     assert v["fe"]["pitch_mm"] > v["surrogate"]["pitch_mm"]
     assert f"the FE needs {v['fe']['pitch_mm']:.2f} mm" in out
     assert "it holds" not in out
 
 
-def test_a_plan_the_fe_confirms_exits_0_with_a_true_verdict(tmp_path, capsys):
+def test_a_criterion_the_fe_field_meets_is_said_and_the_exit_code_follows_the_verdict(
+        tmp_path, capsys):
     code, out, doc = _run(tmp_path, toml_text(), capsys)  # ratio, 95 % bounds (default)
     v = doc["verify"]
     load = v["fe"]["criterion_load_at_plan_pitch"]
-    assert v["holds"] is (load <= 1.0) is True and code == 0
-    assert f"verdict: HOLDS on the FE: criterion load {load:.3f} <= 1" in out
+    assert v["holds"] is (load <= 1.0) is True
+    assert f"criterion: HOLDS on the FE: criterion load {load:.3f} <= 1" in out
+    # the verdict also asks for the same winner and the pitch within 2 % (issue 20)
+    assert v["confirmed"] is (v["winner_agrees"] and v["within_tolerance"])
+    assert code == (0 if v["confirmed"] else EXIT_VERIFY_FAILED)
+    assert ("verdict: CONFIRMED" in out) is v["confirmed"]
     assert v["fe"]["pitch_mm"] <= v["surrogate"]["pitch_mm"]
