@@ -8,6 +8,8 @@ import json
 
 from hapticrom.cli import main
 from hapticrom.commands.plan import EXIT_VERIFY_FAILED
+from hapticrom.documents import schema
+from planner.plan_record import PlanRecord
 from tests.planner.thigh import toml_text
 
 
@@ -15,7 +17,10 @@ def _run(tmp_path, text, capsys):
     layout, out = tmp_path / "layout.toml", tmp_path / "plan.json"
     layout.write_text(text)
     code = main(["plan", str(layout), "--verify", "--out", str(out)])
-    return code, capsys.readouterr().out, json.loads(out.read_text())
+    doc = json.loads(out.read_text())
+    assert PlanRecord.from_json(doc, schema("plan")).verify_confirmed is doc["verify"][
+        "confirmed"]  # the written verify block meets the shipped schema
+    return code, capsys.readouterr().out, doc
 
 
 def test_a_load_above_one_on_the_fe_fails_with_its_own_exit_code(tmp_path, capsys):
