@@ -125,11 +125,13 @@ def rerank(plan: Plan, top_k: int, solve: Solver) -> dict[str, Any]:
             "surrogate": {"value": _r(a), "pitch_mm": _r(s.pitch_mm, 3),
                           "pitch_nominal_mm": _r(s.pitch_nominal_mm, 3),
                           "center_um": _r(s.center_um), "edge_um": _r(s.edge_um),
-                          "load_at_plan_pitch": _r(_load_at_plan(plan, s, s.unit))},
+                          "load_at_plan_pitch": _r(_load_at_plan(plan, s, s.unit)),
+                          "shape": None if s.shape is None else list(s.shape)},
             "fe": {"value": _r(b), "pitch_mm": _r(f.pitch_nominal_mm, 3),
                    "center_um": _r(f.center_um), "edge_um": _r(f.edge_um), "felt": f.felt,
                    "load_at_plan_pitch": _r(_load_at_plan(plan, s, f.unit)),
-                   "dofs": sol.dofs, "wall_s": round(sol.wall_s, 2)}})
+                   "dofs": sol.dofs, "wall_s": round(sol.wall_s, 2),
+                   "shape": None if f.shape is None else list(f.shape)}})
     win_fe, win_solve = fe[0], solves[0]
     load = _load_at_plan(plan, best, win_fe.unit)
     holds = win_fe.felt and load <= 1.0
@@ -150,7 +152,7 @@ def rerank(plan: Plan, top_k: int, solve: Solver) -> dict[str, Any]:
     if not win_fe.felt:
         reasons.append("the unit's own FE amplitude is below the detection threshold")
     elif load > 1.0:
-        reasons.append(f"the criterion fails at the FE field: load {load:.3f} > 1 at the "
+        reasons.append(f"the criterion fails at the FE field: load {round(load, 4):.3f} > 1 at the "
                        f"planned pitch {best.pitch_mm:.2f} mm")
     f = win_fe.unit
     return {
