@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,6 +30,7 @@ def held_out_residuals(predictor) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     from surrogate.train import load_datasets, split
 
     card = predictor.card
+    predictor = predictor.uncalibrated()  # the raw spread, which the likelihood widens
     extra = [o for o in card["training"].get("profile_outputs", {}) if o != "profile_um"]
     data = load_datasets([ROOT / d["path"] for d in card["training_data"]], outputs=extra)
     _, te = split(len(data.codes), card["training"]["test_fraction"], card["training"]["seed"])
@@ -48,6 +50,7 @@ def subject_residuals(subjects: list[dict], predictor, component: str
     """As :func:`held_out_residuals` on FE subjects (one row per subject and frequency): the
     unit's face (magnitude) and the profile of the ``component``."""
     prof = "profile_um" if component == "magnitude" else "profile_normal_um"
+    predictor = predictor.uncalibrated()  # the raw spread, which the likelihood widens
     rows: dict[str, list] = {"center_amplitude_um": [], prof: []}
     for s in subjects:
         for i, f in enumerate(s["frequencies_hz"]):
@@ -252,26 +255,42 @@ def sweep_residuals(predictor, path: Path = SWEEP, n_designs: int = SWEEP_DESIGN
     return f, dist[pk], res
 
 
-def fit_matern_profile(r: np.ndarray, sd: np.ndarray, grid_mm: np.ndarray) -> dict[str, float]:
+def fit_matern_profile(r: np.ndarray, sd: np.ndarray, grid_mm: np.ndarray,
+                       previous_length_mm: float) -> dict[str, dict[str, Any]]:
     """Maximum likelihood of the multivariate t with the profile correlation
-    calibration.likelihood.profile_kernel (Matern 3/2, length L [mm]) on residual vectors
-    ``r`` (rows) with log-std ``sd``: nu, the scale c and L; beside it the exponential kernel
-    with its length fitted, and its log-likelihood."""
+    calibration.likelihood.profile_kernel on residual vectors ``r`` (rows) with log-std
+    ``sd``: nu, the scale c and the length L [mm] for Matern 3/2 and for the exponential, and
+    nu and c for the previous version's exponential of ``previous_length_mm``; each with its
+    log-likelihood and the scale refitted on every 2nd and 4th point (its length kept): a
+    kernel of the right shape gives the same scale whatever the spacing of the points."""
     from scipy.optimize import minimize
 
     from calibration.likelihood import mvt_logpdf, profile_kernel
 
     x = r / sd
     lag = np.abs(grid_mm[:, None] - grid_mm[None, :])
-    fits = {}
-    for kind in ("matern32", "exponential"):
-        def nll(p: np.ndarray, kind: str = kind) -> float:
-            return -float(np.sum(mvt_logpdf(x, np.exp(2 * p[0]) * profile_kernel(
-                lag, float(np.exp(p[2])), kind), float(np.exp(p[1])))))
-        t = minimize(nll, np.array([0.0, 0.7, np.log(10.0)]), method="Nelder-Mead",
+
+    def fit(xs: np.ndarray, lags: np.ndarray, kind: str, length: float | None
+            ) -> tuple[np.ndarray, float]:
+        def nll(p: np.ndarray) -> float:
+            ln = float(np.exp(p[2])) if length is None else length
+            return -float(np.sum(mvt_logpdf(xs, np.exp(2 * p[0]) * profile_kernel(
+                lags, ln, kind), float(np.exp(p[1])))))
+        p0 = np.array([0.0, 0.7] + ([np.log(10.0)] if length is None else []))
+        t = minimize(nll, p0, method="Nelder-Mead",
                      options={"xatol": 1e-4, "fatol": 1e-3, "maxiter": 3000})
-        fits[kind] = {"scale": float(np.exp(t.x[0])), "nu": float(np.exp(t.x[1])),
-                      "length_mm": float(np.exp(t.x[2])), "loglik": -float(t.fun)}
+        return np.exp(t.x), -float(t.fun)
+
+    fits: dict[str, dict[str, Any]] = {}
+    for label, kind, length in (("matern32", "matern32", None),
+                                ("exponential", "exponential", None),
+                                (f"exponential {previous_length_mm:g} mm (previous)",
+                                 "exponential", previous_length_mm)):
+        p, ll = fit(x, lag, kind, length)
+        ln = float(p[2]) if length is None else length
+        fits[label] = {"scale": float(p[0]), "nu": float(p[1]), "length_mm": ln, "loglik": ll,
+                       "scale_spaced": [float(fit(x[:, ::k], lag[::k, ::k], kind, ln)[0][0])
+                                        for k in (2, 4)]}
     return fits
 
 
@@ -325,12 +344,14 @@ def fit_sweep_error(predictor, component: str) -> list[str]:
             lines.append(f"  {name}: held-out rows: the face (one point)")
         else:
             hr = held[name]
-            fits = fit_matern_profile(*hr, grid)
+            fits = fit_matern_profile(*hr, grid, ERROR_LENGTH_MM[name])
             length = round(fits["matern32"]["length_mm"], 1)
             K = profile_kernel(np.abs(dist[:, None] - dist[None, :]), length, "matern32")
             lines.append(f"  {name}: {hr[0].shape[0]} held-out rows x {grid.size} points: "
                          + "; ".join(f"{k} nu {v['nu']:.3g} scale {v['scale']:.3g} length "
-                                     f"{v['length_mm']:.3g} mm log-lik {v['loglik']:.1f}"
+                                     f"{v['length_mm']:.3g} mm log-lik {v['loglik']:.1f} "
+                                     "(scale on every 2nd / 4th point: "
+                                     + " / ".join(f"{c:.3g}" for c in v["scale_spaced"]) + ")"
                                      for k, v in fits.items()))
         m = x.shape[2]
         nu, c = fit_t_per_frequency(x, K)

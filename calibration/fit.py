@@ -6,16 +6,20 @@ Likelihood (docs/calibration.md, :mod:`calibration.likelihood`): each measured a
 prediction mu_i(theta) as
 
     ln y - ln mu(theta) = e + n,  n ~ N(0, diag((sigma_i / y_i)^2)),
-    e | lam ~ N(0, lam c^2 diag(s) C diag(s)),  lam ~ InverseGamma(nu / 2, nu / 2) per output,
+    e | lam ~ N(0, lam diag(c s) C diag(c s)),  lam ~ InverseGamma(nu / 2, nu / 2)
 
-with sigma_i the stated standard uncertainty (independent between points), s_i the
-surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), nu and c per output
-read (:data:`SURROGATE_ERROR_T`: a multivariate Student-t fitted to the model's held-out
-rows; for an output not listed, or with ``error_model = "gaussian"`` or a given
-``std_factor``, lam = 1 and c = ``k`` = :func:`surrogate_std_factor`, the card's widening),
-and C the correlation of the surrogate's errors between points
-(:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
-too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
+per output read and cluster of its frequencies (frequencies chained at most
+``shared_within_hz`` apart share lam; clusters are independent), with sigma_i the stated
+standard uncertainty (independent between points), s_i the surrogate's own predictive log-std
+(its 95 % bounds are exp(+-1.96 s)), nu, c_i (per frequency) and the clusters per output read
+(:data:`SURROGATE_ERROR_T`: a multivariate Student-t measured on the model's held-out rows and
+on the sweep dataset's designs at many frequencies; for an output not listed, or with
+``error_model = "gaussian"`` or a given ``std_factor``, lam = 1 and c = ``k`` =
+:func:`surrogate_std_factor`, the card's widening), and C the correlation of the surrogate's
+errors between points (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at
+5 mm is wrong at 6 mm too, and at 160 Hz when it is at 150 Hz, so its error does not average
+out over many points; Matern 3/2 along the profile, Gaussian across frequency). Priors:
+:mod:`calibration.priors`.
 
 The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
