@@ -202,7 +202,9 @@ def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
 #: the sweep dataset the cross-frequency structure is measured on (FE solves of the same space
 #: and solver as datasets/default, each design at every 2 Hz in 100-250 Hz; not trained on)
 SWEEP = Path("/work/sweepdata/default-sweep")
-SWEEP_DESIGNS = 1600  # the first designs by sample index (the dataset was still growing)
+#: the first designs written (in the order of its parts, which are immutable: the dataset was
+#: still growing, so this set is fixed)
+SWEEP_DESIGNS = 1600
 SWEEP_STEP_HZ = 10.0  # its frequencies used: the study's 10 Hz grid
 
 
@@ -215,7 +217,7 @@ def sweep_residuals(predictor, path: Path = SWEEP, n_designs: int = SWEEP_DESIGN
     from surrogate.data.store import Store
 
     df = Store.open(path).read()
-    df = df[df["status"] == "ok"].sort_values("sample_index").head(n_designs)
+    df = df[df["status"] == "ok"].head(n_designs)
     n = len(df)
     freq = np.asarray(df["sweep_frequency_hz"].iloc[0], dtype=float)
     keep = np.flatnonzero(np.isclose(np.mod(freq, SWEEP_STEP_HZ), 0.0))
