@@ -200,7 +200,8 @@ def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
 
 
 #: the sweep dataset the cross-frequency structure is measured on (FE solves of the same space
-#: and solver as datasets/default, each design at every 2 Hz in 100-250 Hz; not trained on)
+#: and solver as datasets/default, each design at every 2 Hz in 100-250 Hz; not trained on:
+#: ``hapticrom generate --space datasets/spaces/default-sweep.toml``); --sweep DIR for another
 SWEEP = Path("/work/sweepdata/default-sweep")
 #: the first designs written (in the order of its parts, which are immutable: the dataset was
 #: still growing, so this set is fixed)
@@ -316,7 +317,7 @@ def fit_t_per_frequency(x: np.ndarray, corr: np.ndarray) -> tuple[float, np.ndar
     return float(np.exp(t.x[0])), np.exp(t.x[1:])
 
 
-def fit_sweep_error(predictor, component: str) -> list[str]:
+def fit_sweep_error(predictor, component: str, path: Path = SWEEP) -> list[str]:
     """The surrogate's error structure across frequency, per output a ``component`` sensor
     reads (calibration.fit.SURROGATE_ERROR_T): the correlation length along the profile
     (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid); on the sweep
@@ -333,8 +334,8 @@ def fit_sweep_error(predictor, component: str) -> list[str]:
                ("profile_normal_um",))
     held = held_out_residuals(predictor.uncalibrated())
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
-    f, dist, sweep = sweep_residuals(predictor)
-    lines = [f"  sweep dataset {SWEEP}: {next(iter(sweep.values()))[0].shape[0]} designs x "
+    f, dist, sweep = sweep_residuals(predictor, path)
+    lines = [f"  sweep dataset {path}: {next(iter(sweep.values()))[0].shape[0]} designs x "
              f"{f.size} frequencies ({f[0]:g}-{f[-1]:g} Hz every {SWEEP_STEP_HZ:g}), profile "
              f"points {dist[0]:g}-{dist[-1]:g} mm every {dist[1] - dist[0]:g} mm"]
     for name in outputs:
