@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from calibration_errors import error_check, fit_surrogate_error
+from calibration_errors import SWEEP, error_check, fit_surrogate_error, fit_sweep_error
 
 from calibration import calibrate, surrogate_std_factor
 from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
@@ -250,6 +250,12 @@ def main() -> None:
     ap.add_argument("--surrogate-error", action="store_true",
                     help="only fit the Student-t of the surrogate's error (nu, scale) to its "
                     "held-out rows, per output the sensor kind reads")
+    ap.add_argument("--sweep-error", action="store_true",
+                    help="only measure the surrogate's error across frequency on the sweep "
+                    "dataset (scale per frequency, shared mixing variable, frequency length)")
+    ap.add_argument("--sweep", type=Path, default=SWEEP,
+                    help="with --sweep-error: the sweep dataset (hapticrom generate --space "
+                    f"datasets/spaces/default-sweep.toml; default {SWEEP})")
     ap.add_argument("--error-check", action="store_true",
                     help="only check the surrogate's error at the true inputs of the study's "
                     "measurements against the error model (probability integral transform)")
@@ -285,6 +291,11 @@ def main() -> None:
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
             print("\n".join(error_check(subjects, predictor, s)))
+        return
+    if args.sweep_error:
+        for s, predictor in predictors.items():
+            print(f"{s} ({predictor.card.get('name')}):")
+            print("\n".join(fit_sweep_error(predictor, s, args.sweep)), flush=True)
         return
     if args.surrogate_error:
         for s, predictor in predictors.items():

@@ -26,17 +26,23 @@ __all__ = ["KIND", "SCHEMA_VERSION", "CalibrationFileError", "Tissue", "calibrat
 KIND = "hapticrom.calibration"
 SCHEMA_VERSION = 1
 LIKELIHOOD = ("ln y - ln mu(theta) = e + n, n ~ N(0, diag((sigma_i/y_i)^2)), per output read "
-              "e | lam ~ N(0, lam c^2 diag(s) C diag(s)), lam ~ InverseGamma(nu/2, nu/2) (a "
-              "multivariate Student-t; lam = 1, c = k for an output whose surrogate_error nu is "
-              "null: the Gaussian): y the "
+              "and cluster of its frequencies (neighbours at most shared_within_hz apart) "
+              "e | lam ~ N(0, lam diag(c s) C diag(c s)), lam ~ InverseGamma(nu/2, nu/2) (a "
+              "multivariate Student-t; independent between clusters; lam = 1, c = k for an "
+              "output whose surrogate_error nu is null: the Gaussian): y the "
               "measured peak displacement amplitudes, sigma_i their stated standard "
               "uncertainties, mu the surrogate's prediction, s its predictive log-std (95 % "
               "bounds exp(+-1.96 s); surrogate_spread 'posterior': s held fixed at its root-mean-"
-              "square over the late burn-in walkers, 'local': s at each theta), c and nu per "
-              "output in surrogate_error, k the surrogate's std factor, C the correlation of its "
-              "errors: exp(-|d_i - d_j| / error_length_mm[output]) along a profile output times "
-              "exp(-|f_i - f_j| / error_frequency_hz), none between points of different "
-              "outputs (the face and the profile, the magnitude and the normal component)")
+              "square over the late burn-in walkers, 'local': s at each theta), c (per frequency: "
+              "scale_by_frequency_hz) and nu per output in surrogate_error, k the surrogate's "
+              "std factor, C the correlation of its errors: along a profile output its "
+              "profile_kernel of |d_i - d_j| / error_length_mm[output] (matern32: (1 + a) "
+              "exp(-a), a = sqrt(3) |d_i - d_j| / length; exponential: exp(-|d_i - d_j| / "
+              "length)) times, across frequencies, its frequency_kernel (gaussian: "
+              "exp(-(f_i - f_j)^2 / (2 error_frequency_hz[output]^2)); exponential: "
+              "exp(-|f_i - f_j| / error_frequency_hz[output])), none between clusters nor "
+              "between points of different outputs (the face and the profile, the magnitude and "
+              "the normal component)")
 
 
 class CalibrationFileError(FieldError):
@@ -59,6 +65,26 @@ def statement(summary: dict[str, dict[str, Any]]) -> str:
                  "posterior is mostly the prior; measure more points, farther from the unit "
                  "or at more frequencies, or fix it")
     return text
+
+
+def _error_model(cal: Calibration) -> dict[str, dict[str, Any]]:
+    """Per output read: the surrogate's error model as used (the scale at each measured
+    frequency of that output, and its mean over the output's points)."""
+    fwd = cal.forward
+    c = cal.point_scale
+    f = np.array([p.frequency_hz for p in fwd.measurement.points])
+    out = {}
+    for g in fwd.groups:
+        e = cal.error_model[g.output]
+        per_f = {f"{x:g}": _r(float(np.mean(c[g.index][f[g.index] == x])), 4)
+                 for x in np.unique(f[g.index])}
+        out[g.output] = {
+            "nu": None if e["nu"] is None else _r(e["nu"], 4),
+            "scale": _r(float(np.mean(c[g.index])), 4), "scale_by_frequency_hz": per_f,
+            "length_mm": e["length_mm"], "frequency_hz": e["frequency_hz"],
+            "shared_within_hz": e["shared_within_hz"], "profile_kernel": e["profile_kernel"],
+            "frequency_kernel": e["frequency_kernel"]}
+    return out
 
 
 def calibration_document(cal: Calibration, *, model_path: str, tissue_names: list[str],
@@ -97,9 +123,7 @@ def calibration_document(cal: Calibration, *, model_path: str, tissue_names: lis
                        "error_length_mm": cal.error_length_mm,
                        "error_frequency_hz": cal.error_frequency_hz,
                        "surrogate_spread": cal.spread,
-                       "surrogate_error": {o: {"nu": None if e["nu"] is None else _r(e["nu"], 4),
-                                               "scale": _r(e["scale"], 4)}
-                                           for o, e in cal.error_model.items()}},
+                       "surrogate_error": _error_model(cal)},
         "sampler": {k: (_r(v, 4) if isinstance(v, float) else
                         [_r(x, 4) for x in v] if isinstance(v, list) else v)
                     for k, v in cal.sampler.items()},

@@ -6,16 +6,20 @@ Likelihood (docs/calibration.md, :mod:`calibration.likelihood`): each measured a
 prediction mu_i(theta) as
 
     ln y - ln mu(theta) = e + n,  n ~ N(0, diag((sigma_i / y_i)^2)),
-    e | lam ~ N(0, lam c^2 diag(s) C diag(s)),  lam ~ InverseGamma(nu / 2, nu / 2) per output,
+    e | lam ~ N(0, lam diag(c s) C diag(c s)),  lam ~ InverseGamma(nu / 2, nu / 2)
 
-with sigma_i the stated standard uncertainty (independent between points), s_i the
-surrogate's own predictive log-std (its 95 % bounds are exp(+-1.96 s)), nu and c per output
-read (:data:`SURROGATE_ERROR_T`: a multivariate Student-t fitted to the model's held-out
-rows; for an output not listed, or with ``error_model = "gaussian"`` or a given
-``std_factor``, lam = 1 and c = ``k`` = :func:`surrogate_std_factor`, the card's widening),
-and C the correlation of the surrogate's errors between points
-(:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at 5 mm is wrong at 6 mm
-too, so its error does not average out over many points). Priors: :mod:`calibration.priors`.
+per output read and cluster of its frequencies (frequencies chained at most
+``shared_within_hz`` apart share lam; clusters are independent), with sigma_i the stated
+standard uncertainty (independent between points), s_i the surrogate's own predictive log-std
+(its 95 % bounds are exp(+-1.96 s)), nu, c_i (per frequency) and the clusters per output read
+(:data:`SURROGATE_ERROR_T`: a multivariate Student-t measured on the model's held-out rows and
+on the sweep dataset's designs at many frequencies; for an output not listed, or with
+``error_model = "gaussian"`` or a given ``std_factor``, lam = 1 and c = ``k`` =
+:func:`surrogate_std_factor`, the card's widening), and C the correlation of the surrogate's
+errors between points (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at
+5 mm is wrong at 6 mm too, and at 160 Hz when it is at 150 Hz, so its error does not average
+out over many points; Matern 3/2 along the profile, Gaussian across frequency). Priors:
+:mod:`calibration.priors`.
 
 The surrogate's spread s is held fixed while the kept chain is sampled (``spread =
 "posterior"``): s_i^2 is the mean of s_i(theta)^2 over the walkers of the second half of the
@@ -49,31 +53,55 @@ from calibration.likelihood import hdi, mixture_log_likelihood
 from calibration.measurement import Measurement
 from calibration.priors import Prior, PriorError, priors_for
 
-__all__ = ["ERROR_MODELS", "IDENTIFIABLE_WIDTH_RATIO", "INTERVAL_KINDS", "SPREADS",
-           "SURROGATE_ERROR_T", "Calibration", "calibrate", "surrogate_std_factor"]
+__all__ = ["ERROR_MODELS", "IDENTIFIABLE_WIDTH_RATIO", "INTERVAL_KINDS", "SCALE_HZ", "SPREADS",
+           "SURROGATE_ERROR_T", "Calibration", "calibrate", "error_settings", "point_scales",
+           "surrogate_std_factor"]
 
 #: a parameter whose 95 % posterior interval is wider than this fraction of its prior's 95 %
 #: interval (in the sampling coordinate) is reported as not determined by the data
 IDENTIFIABLE_WIDTH_RATIO = 0.8
 Z95 = 1.959964
 KEPT_SAMPLES = 400  # posterior draws stored in the calibration document
-#: correlation length of the surrogate's errors along each profile output [mm] and across
-#: frequencies [Hz] (measured by bench/bench_calibration.py --residuals on FE solves apart from
-#: the study's: 19.2 mm for nn-default's magnitude profile and 22.1 mm for nn-normal's, 4.5 mm
-#: for nn-normal's normal component, whose error is dominated by the dips of |u_z|; 60 Hz)
+#: the first versions' correlation of the surrogate's errors (the Gaussian error model, and the
+#: t's lengths when none is given): exponential along each profile output [mm] and across
+#: frequencies [Hz], measured with a Gaussian by bench/bench_calibration.py --residuals on FE
+#: solves apart from the study's (19.2 mm for nn-default's magnitude profile, 22.1 mm for
+#: nn-normal's, 4.5 mm for nn-normal's normal component; 60 Hz)
 ERROR_LENGTH_MM = {"profile_um": 20.0, "profile_normal_um": 4.5}
 ERROR_FREQUENCY_HZ = 60.0
 #: how the surrogate's spread enters the likelihood (see the module docstring)
 SPREADS = ("posterior", "local")
-#: the surrogate's error per output read: a multivariate Student-t (calibration.likelihood),
-#: degrees of freedom ``nu`` and scale (of its predictive log-std) fitted by maximum likelihood
-#: to the held-out rows of its model's training data (the card's metrics' rows):
-#: ``python bench/bench_calibration.py --surrogate-error`` (nn-default for the magnitude
-#: outputs, nn-normal for the normal component). An output not listed: the Gaussian with the
-#: card's factor (:func:`surrogate_std_factor`).
-SURROGATE_ERROR_T = {"center_amplitude_um": {"nu": 2.18, "scale": 0.98},
-                     "profile_um": {"nu": 1.86, "scale": 0.541},
-                     "profile_normal_um": {"nu": 1.32, "scale": 0.706}}
+#: frequencies [Hz] of the t's scale per frequency (linear in between, constant outside)
+SCALE_HZ = tuple(float(f) for f in range(100, 251, 10))
+#: the surrogate's error per output read: a multivariate Student-t per cluster of frequencies
+#: (calibration.likelihood), ``nu`` degrees of freedom, ``scale`` per frequency of
+#: :data:`SCALE_HZ` (the factor on its predictive log-std), correlation along the profile Matern
+#: 3/2 with ``length_mm``, across frequencies exp(-df^2 / (2 frequency_hz^2)), one mixing
+#: variable shared by the frequencies of a cluster (neighbours at most ``shared_within_hz``
+#: apart), independent between clusters. Measured (``python bench/bench_calibration.py
+#: --sweep-error``): the profile length by maximum likelihood on the held-out rows of the
+#: model's own split (1 mm grid); nu and the scales on the sweep dataset (its first 1600 FE
+#: designs x the 16 frequencies of a 10 Hz grid, which no model trained on), frequency by
+#: frequency; the
+#: mixing variable shared at a frequency difference where a shared one has the higher
+#: likelihood on the sweep's pairs of frequencies of one design, the frequency length fitted to
+#: the pairs' correlation there (nn-default for the magnitude outputs, nn-normal for the normal
+#: component). An output not listed: the Gaussian with the card's factor
+#: (:func:`surrogate_std_factor`).
+SURROGATE_ERROR_T: dict[str, dict[str, Any]] = {
+    "center_amplitude_um": {
+        "nu": 2.54, "frequency_hz": 17.7, "shared_within_hz": 40.0,
+        "scale": (1.65, 1.25, 1.14, 1.07, 1.01, 0.913, 0.883, 0.892, 0.865, 0.86, 0.844, 0.824,
+                  0.809, 0.782, 0.785, 0.799)},
+    "profile_um": {
+        "nu": 1.91, "length_mm": 10.2, "frequency_hz": 16.5, "shared_within_hz": 20.0,
+        "scale": (0.942, 0.942, 0.997, 1.01, 0.985, 0.968, 1.02, 1.06, 1.1, 1.15, 1.22, 1.26,
+                  1.28, 1.28, 1.27, 1.25)},
+    "profile_normal_um": {
+        "nu": 1.48, "length_mm": 4.1, "frequency_hz": 12.4, "shared_within_hz": 10.0,
+        "scale": (1.01, 0.925, 0.992, 1.1, 1.18, 1.23, 1.29, 1.31, 1.31, 1.31, 1.34, 1.41, 1.4,
+                  1.43, 1.51, 1.61)},
+}
 #: "t": SURROGATE_ERROR_T; "gaussian": the first versions' Gaussian widened by the card's k
 ERROR_MODELS = ("t", "gaussian")
 #: the reported 95 % interval: highest posterior density in the sampling coordinate (includes
@@ -107,9 +135,11 @@ class Calibration:
     std_factor: float
     sampler: dict[str, Any] = field(default_factory=dict)
     error_length_mm: dict[str, float] = field(default_factory=dict)  # per profile output
-    error_frequency_hz: float = ERROR_FREQUENCY_HZ
+    #: per output read: the frequency scale of its error correlation [Hz]
+    error_frequency_hz: dict[str, float] = field(default_factory=dict)
     spread: str = "posterior"
-    #: per output read: {"nu": degrees of freedom (None: Gaussian), "scale": of its log-std}
+    #: per output read (:func:`error_settings`): "nu" (None: Gaussian), "scale" (one factor
+    #: on its log-std, or one per frequency of "scale_hz"), the kernels, "shared_within_hz"
     error_model: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
@@ -119,22 +149,22 @@ class Calibration:
 
     def scale_for(self, fwd: ForwardModel) -> np.ndarray:
         """The factor on the surrogate's log-std at each point ``fwd`` reads."""
-        c = np.full(fwd.y.size, self.std_factor)
-        for g in fwd.groups:
-            c[g.index] = self.error_model.get(g.output, {}).get("scale", self.std_factor)
-        return c
+        return point_scales(fwd, self.error_model, self.std_factor)
 
     def surrogate_error_draws(self, fwd: ForwardModel, std: np.ndarray,
                               rng: np.random.Generator) -> np.ndarray:
         """Draws of the surrogate's error at the points ``fwd`` reads (rows of ``std`` (n, m),
-        its log-std at each draw): per output a common lam ~ InverseGamma(nu/2, nu/2) (1 for
+        its log-std at each draw): per cluster of frequencies of an output
+        (:meth:`ForwardModel.error_blocks`) a common lam ~ InverseGamma(nu/2, nu/2) (1 for
         the Gaussian) times independent normals of sd scale * std."""
         e = self.scale_for(fwd) * std * rng.standard_normal(std.shape)
-        for g in fwd.groups:
+        shared = {o: v.get("shared_within_hz") for o, v in self.error_model.items()
+                  if v.get("shared_within_hz") is not None}
+        for idx, g in fwd.error_blocks(shared):
             nu = self.error_model.get(g.output, {}).get("nu")
             if nu is not None:
                 lam = nu / rng.chisquare(nu, size=(std.shape[0], 1))
-                e[:, g.index] *= np.sqrt(lam)
+                e[:, idx] *= np.sqrt(lam)
         return e
 
     @property
@@ -193,12 +223,51 @@ class Calibration:
         return mean, self.point_scale * std
 
 
+def error_settings(output: str, t_model: bool, k: float, length_mm: float | None = None,
+                   frequency_hz: float | None = None) -> dict[str, Any]:
+    """The surrogate's error model of one output read: the Student-t of
+    :data:`SURROGATE_ERROR_T` (``t_model`` and the output listed) or the first versions'
+    Gaussian (factor ``k``, exponential kernels of :data:`ERROR_LENGTH_MM` and
+    :data:`ERROR_FREQUENCY_HZ`, lam = 1); ``length_mm`` and
+    ``frequency_hz`` replace the lengths when given. Keys: nu (None: Gaussian), scale (a
+    number, or a tuple over scale_hz), scale_hz, length_mm (None at the unit's face),
+    frequency_hz, shared_within_hz (None: all frequencies), profile_kernel, frequency_kernel."""
+    t = SURROGATE_ERROR_T.get(output) if t_model else None
+    face = output in ("center_amplitude_um", "center_normal_um", "center_uz_um")
+    if t is None:
+        length = ERROR_LENGTH_MM.get(output, ERROR_LENGTH_MM["profile_um"])
+        return {"nu": None, "scale": float(k), "scale_hz": None,
+                "length_mm": None if face else float(length_mm or length),
+                "frequency_hz": float(frequency_hz or ERROR_FREQUENCY_HZ),
+                "shared_within_hz": None, "profile_kernel": "exponential",
+                "frequency_kernel": "exponential"}
+    return {"nu": t["nu"], "scale": tuple(t["scale"]), "scale_hz": SCALE_HZ,
+            "length_mm": None if face else float(length_mm or t["length_mm"]),
+            "frequency_hz": float(frequency_hz or t["frequency_hz"]),
+            "shared_within_hz": t["shared_within_hz"], "profile_kernel": "matern32",
+            "frequency_kernel": "gaussian"}
+
+
+def point_scales(fwd: ForwardModel, errors: Mapping[str, Mapping[str, Any]],
+                 default: float) -> np.ndarray:
+    """(m,) the factor on the surrogate's log-std at each point ``fwd`` reads: its output's
+    scale, at its frequency when the scale is given per frequency (linear in between)."""
+    f = np.array([p.frequency_hz for p in fwd.measurement.points])
+    c = np.full(fwd.y.size, float(default))
+    for g in fwd.groups:
+        e = errors.get(g.output, {})
+        sc = e.get("scale", default)
+        c[g.index] = (np.interp(f[g.index], e["scale_hz"], sc) if e.get("scale_hz") is not None
+                      else sc)
+    return c
+
+
 def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
               priors: Sequence[str] = (), fixed: Mapping[str, Any] | None = None,
               walkers: int = 32, steps: int = 1000, burn: int = 333, n_init: int = 4096,
               seed: int = 0, std_factor: float | None = None,
               error_length_mm: float | None = None,
-              error_frequency_hz: float = ERROR_FREQUENCY_HZ,
+              error_frequency_hz: float | None = None,
               spread: str = "posterior", error_model: str = "t") -> Calibration:
     """Sample the posterior of the inputs ``fit`` (model input names) given ``measurement``.
 
@@ -206,8 +275,9 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     (model units); a model input with no value is an error naming it. ``priors``: given priors
     (``NAME=KIND:A,B``), the rest default (:mod:`calibration.priors`). ``spread``: how the
     surrogate's spread enters the likelihood (:data:`SPREADS`, module docstring);
-    ``error_length_mm``: one correlation length for every profile output, instead of
-    :data:`ERROR_LENGTH_MM`'s per output. ``error_model``: :data:`ERROR_MODELS` (a given
+    ``error_length_mm``, ``error_frequency_hz``: one correlation length for every profile
+    output and one frequency scale for every output, instead of the error model's per output
+    (:func:`error_settings`). ``error_model``: :data:`ERROR_MODELS` (a given
     ``std_factor`` means the Gaussian with that factor)."""
     if not 0 <= burn < steps:
         raise PriorError("steps", f"steps {steps} must exceed burn {burn} >= 0")
@@ -233,20 +303,19 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     fwd = ForwardModel(predictor, measurement, [p.name for p in prs], given)
     k = surrogate_std_factor(predictor.card) if std_factor is None else std_factor
     y, rel = fwd.y, fwd.rel_sigma
-    lengths = {o: (ERROR_LENGTH_MM.get(o, ERROR_LENGTH_MM["profile_um"])
-                   if error_length_mm is None else float(error_length_mm))
-               for o in fwd.profile_outputs}
-    corr = fwd.error_correlation(lengths, error_frequency_hz)
     t_model = error_model == "t" and std_factor is None
-    errors = {g.output: ({"nu": SURROGATE_ERROR_T[g.output]["nu"],
-                          "scale": SURROGATE_ERROR_T[g.output]["scale"]}
-                         if t_model and g.output in SURROGATE_ERROR_T else
-                         {"nu": None, "scale": k}) for g in fwd.groups}
-    scale = np.full(y.size, k)
-    blocks = []
-    for g in fwd.groups:
-        scale[g.index] = errors[g.output]["scale"]
-        blocks.append((g.index, errors[g.output]["nu"] or math.inf))
+    errors = {g.output: error_settings(g.output, t_model, k, error_length_mm,
+                                       error_frequency_hz) for g in fwd.groups}
+    lengths = {o: errors[o]["length_mm"] for o in fwd.profile_outputs}
+    freq_hz = {o: e["frequency_hz"] for o, e in errors.items()}
+    shared = {o: e["shared_within_hz"] for o, e in errors.items()
+              if e["shared_within_hz"] is not None}
+    corr = fwd.error_correlation(
+        lengths or 1.0, freq_hz, shared_within_hz=shared,
+        profile_kernel={o: e["profile_kernel"] for o, e in errors.items()},
+        frequency_kernel={o: e["frequency_kernel"] for o, e in errors.items()})
+    scale = point_scales(fwd, errors, k)
+    blocks = [(idx, errors[g.output]["nu"] or math.inf) for idx, g in fwd.error_blocks(shared)]
     fixed_std: list[np.ndarray] = []  # the surrogate's spread held fixed ("posterior")
 
     def x_of(z: np.ndarray) -> np.ndarray:
@@ -313,5 +382,5 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
             "autocorr_steps": [float(t) for t in tau],
             "effective_samples": float(walkers * (steps - burn) / max(np.nanmax(tau), 1.0)),
             "wall_s": time.perf_counter() - t0}
-    return Calibration(measurement, fwd, prs, samples, lps, k, info, lengths,
-                       error_frequency_hz, spread, errors)
+    return Calibration(measurement, fwd, prs, samples, lps, k, info, lengths, freq_hz,
+                       spread, errors)

@@ -163,30 +163,61 @@ class ForwardModel:
                        for output, items in groups.items()]
 
     def error_correlation(self, length_mm: float | Mapping[str, float],
-                          frequency_scale_hz: float) -> np.ndarray:
+                          frequency_scale_hz: float | Mapping[str, float], *,
+                          profile_kernel: str | Mapping[str, str] = "exponential",
+                          frequency_kernel: str | Mapping[str, str] = "exponential",
+                          shared_within_hz: float | Mapping[str, float] | None = None
+                          ) -> np.ndarray:
         """(m, m) correlation of the surrogate's errors between the measured points: along
-        a profile exp(-|d_i - d_j| / length_mm), between frequencies
-        exp(-|f_i - f_j| / frequency_scale_hz), none between points read from different
-        outputs (the unit's face and the profile; the magnitude and the normal component).
-        ``length_mm``: one length, or one per profile output name (see docs/calibration.md
-        for how these were measured)."""
+        a profile :func:`calibration.likelihood.profile_kernel` of |d_i - d_j| (``length_mm``,
+        kind ``profile_kernel``), between frequencies exp(-|f_i - f_j| / scale)
+        (``frequency_kernel`` "exponential") or exp(-(f_i - f_j)^2 / (2 scale^2))
+        ("gaussian"), none between points read from different outputs (the unit's face and
+        the profile; the magnitude and the normal component) nor between frequencies of
+        different clusters (:meth:`error_blocks`, ``shared_within_hz``; None: one cluster per
+        output). ``length_mm``, ``frequency_scale_hz``, ``shared_within_hz`` and the kernels: one
+        value, or one per output name (see docs/calibration.md for how these were measured)."""
+        from calibration.likelihood import profile_kernel as kernel
+
+        def per(value: Any, output: str) -> Any:
+            return value if isinstance(value, int | float | str) else value[output]
+
         m = self.y.size
-        d = np.zeros(m)
-        face = np.zeros(m, dtype=bool)
-        which = np.zeros(m, dtype=int)
-        length = np.ones(m)
+        rho = np.zeros((m, m))
         f = np.array([p.frequency_hz for p in self.measurement.points])
-        for i, g in enumerate(self.groups):
-            d[g.index] = g.weights @ (self.grid_m * 1e3)
-            face[g.index] = g.face
-            which[g.index] = i
+        for idx, g in self.error_blocks(shared_within_hz):
+            fi = f[idx]
+            df = np.abs(fi[:, None] - fi[None, :]) / float(per(frequency_scale_hz, g.output))
+            fk = per(frequency_kernel, g.output)
+            if fk not in ("exponential", "gaussian"):
+                raise ValueError(f"frequency kernel {fk!r}: allowed exponential, gaussian")
+            r = np.exp(-df) if fk == "exponential" else np.exp(-0.5 * df ** 2)
             if not g.face:
-                length[g.index] = (length_mm if isinstance(length_mm, int | float)
-                                   else length_mm[g.output])
-        rho_d = np.exp(-np.abs(d[:, None] - d[None, :]) / length[:, None])
-        same = which[:, None] == which[None, :]
-        rho = np.where(same, np.where(face[:, None], 1.0, rho_d), 0.0)
-        return rho * np.exp(-np.abs(f[:, None] - f[None, :]) / frequency_scale_hz)
+                pos = np.searchsorted(g.index, idx)
+                d = g.weights[pos] @ (self.grid_m * 1e3)
+                r = r * kernel(d[:, None] - d[None, :], float(per(length_mm, g.output)),
+                               per(profile_kernel, g.output))
+            rho[np.ix_(idx, idx)] = r
+        return rho
+
+    def error_blocks(self, shared_within_hz: float | Mapping[str, float] | None = None
+                     ) -> list[tuple[np.ndarray, _Group]]:
+        """The points whose surrogate errors share one mixing variable: per output read, the
+        points at frequencies chained at most ``shared_within_hz`` apart
+        (:func:`calibration.likelihood.frequency_clusters`; None: all its frequencies), as
+        (sorted point positions, the output's group)."""
+        from calibration.likelihood import frequency_clusters
+
+        f = np.array([p.frequency_hz for p in self.measurement.points])
+        out = []
+        for g in self.groups:
+            idx = np.sort(g.index)
+            within = (np.inf if shared_within_hz is None else
+                      float(shared_within_hz) if isinstance(shared_within_hz, int | float)
+                      else float(shared_within_hz.get(g.output, np.inf)))
+            labels = frequency_clusters(f[idx], within)
+            out += [(idx[labels == c], g) for c in np.unique(labels)]
+        return out
 
     @property
     def profile_outputs(self) -> tuple[str, ...]:

@@ -25,12 +25,38 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["hdi", "mixture_log_likelihood", "mvt_logpdf", "precision_grid"]
+__all__ = ["PROFILE_KERNELS", "frequency_clusters", "hdi", "mixture_log_likelihood",
+           "mvt_logpdf", "precision_grid", "profile_kernel"]
 
 #: grid of u = ln w for the precision integral: lowest u, and the step's cap
 U_LOW = -16.0
 U_STEP = 0.1
 ROW_CHUNK = 128
+#: shapes of the correlation of the surrogate's errors along a profile (:func:`profile_kernel`)
+PROFILE_KERNELS = ("matern32", "exponential")
+
+
+def profile_kernel(lag_mm: np.ndarray, length_mm: float, kind: str = "matern32") -> np.ndarray:
+    """Correlation of the surrogate's errors at points ``lag_mm`` apart along a profile:
+    Matern 3/2, (1 + a) exp(-a) with a = sqrt(3) |lag| / length (errors smooth along the
+    profile: once differentiable), or the exponential exp(-|lag| / length) (rough)."""
+    a = np.abs(np.asarray(lag_mm, dtype=float)) / length_mm
+    if kind == "exponential":
+        return np.exp(-a)
+    if kind != "matern32":
+        raise ValueError(f"kernel {kind!r}: allowed {', '.join(PROFILE_KERNELS)}")
+    a = math.sqrt(3.0) * a
+    return (1.0 + a) * np.exp(-a)
+
+
+def frequency_clusters(frequency_hz: np.ndarray, within_hz: float) -> np.ndarray:
+    """Label per point: the cluster of its frequency, frequencies chained while neighbours
+    (sorted) are at most ``within_hz`` apart. The surrogate's error shares one mixing
+    variable within a cluster; clusters are independent (docs/calibration.md)."""
+    f = np.asarray(frequency_hz, dtype=float)
+    u = np.unique(f)
+    labels = np.concatenate([[0], np.cumsum(np.diff(u) > within_hz + 1e-9)])
+    return labels[np.searchsorted(u, f)]
 
 
 def precision_grid(nu: float) -> tuple[np.ndarray, np.ndarray]:

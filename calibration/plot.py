@@ -79,8 +79,10 @@ def write_calibration_plot(cal: Calibration, path: str | Path, *, n_draws: int =
     fitted = "; ".join(f"{n} {s['mean']:.3g} [{s['ci95'][0]:.3g}, {s['ci95'][1]:.3g}]"
                        + ("" if s["identifiable"] else " (not determined)")
                        for n, s in summary.items())
-    errors = ", ".join(f"Student-t nu {e['nu']:g}, x{e['scale']:.2f}" if e["nu"] is not None
-                       else f"Gaussian x{e['scale']:.2f}" for e in cal.error_model.values())
+    c = cal.point_scale
+    errors = ", ".join((f"Student-t nu {cal.error_model[g.output]['nu']:g}"
+                        if cal.error_model[g.output]["nu"] is not None else "Gaussian")
+                       + f", x{np.mean(c[g.index]):.2f}" for g in cal.forward.groups)
     design = ", ".join(f"{k} {v}" for k, v in cal.measurement.design.items()
                        if k in ("orientation", "attachment", "n_rings"))
     figstyle.annotate(

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from calibration.fit import calibrate
+from calibration.fit import SURROGATE_ERROR_T, calibrate
 from calibration.forward import ForwardModel
 from calibration.likelihood import mixture_log_likelihood
 from calibration.measurement import MeasurementError, measurement_from_rows, read_measurement
@@ -112,7 +112,12 @@ def test_calibrate_picks_nn_normal_for_an_ldv_measurement(tmp_path, capsys):
     doc = json.loads(out.read_text())
     assert problems(doc, schema("calibration")) == []
     assert doc["model"]["name"] == "nn-normal"
-    assert doc["likelihood"]["error_length_mm"] == {"profile_normal_um": 4.5}
+    assert doc["likelihood"]["error_length_mm"] == {
+        "profile_normal_um": SURROGATE_ERROR_T["profile_normal_um"]["length_mm"]}
+    err = doc["likelihood"]["surrogate_error"]["profile_normal_um"]
+    # the example measures at 120 and 170 Hz: one mixing variable each, its scale per frequency
+    assert err["profile_kernel"] == "matern32" and err["shared_within_hz"] < 50.0
+    assert set(err["scale_by_frequency_hz"]) == {"120", "170"}
     assert doc["likelihood"]["surrogate_spread"] == "posterior"
     assert {p["component"] for p in doc["measurement"]["points"]} == {"normal"}
     lo, hi = doc["posterior"]["skin_E_kPa"]["ci95"]  # the example was made with 75 kPa
