@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from calibration_errors import SWEEP, error_check, fit_surrogate_error, fit_sweep_error
+from calibration_errors import error_check, fit_surrogate_error, fit_sweep_error
 
 from calibration import calibrate, surrogate_std_factor
 from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
@@ -57,14 +57,14 @@ def run(subjects: list[dict], predictor, *, component: str = "magnitude",
             m = synthetic_measurement(s, rel_noise=noise, n_points=int(rng.integers(5, 11)),
                                       rng=rng, component=component,
                                       sensor="ldv" if component == "normal" else None)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             cal = calibrate(predictor, m, FIT, steps=steps, burn=steps // 3, seed=int(s["id"]),
                             std_factor=std_factor, **likelihood)
             summary = cal.summary()
-            wall = time.perf_counter() - t0
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             records.append({"id": s["id"], "sensor": component, "noise": noise,
                             "points": len(m.points), "truth": s["truth"], "summary": summary,
-                            "wall_s": wall})
+                            "wall_s": wall, "cpu_s": cpu})
             if not quiet:
                 inside = "".join("y" if sm["ci95"][0] <= s["truth"][n] <= sm["ci95"][1] else "n"
                                  for n, sm in summary.items())
@@ -104,6 +104,10 @@ def table(records: list[dict], interval: str = "ci95") -> list[str]:
     walls = [r["wall_s"] for r in records]
     lines.append(f"run time per calibration: median {statistics.median(walls):.1f} s, max "
                  f"{max(walls):.1f} s ({len(records)} calibrations)")
+    cpus = [r["cpu_s"] for r in records if "cpu_s" in r]  # records before it lack it
+    if cpus:  # the process's CPU time: what the run takes on an unloaded machine
+        lines.append(f"CPU time per calibration: median {statistics.median(cpus):.1f} s, max "
+                     f"{max(cpus):.1f} s ({len(cpus)} calibrations)")
     return lines
 
 
@@ -253,9 +257,10 @@ def main() -> None:
     ap.add_argument("--sweep-error", action="store_true",
                     help="only measure the surrogate's error across frequency on the sweep "
                     "dataset (scale per frequency, shared mixing variable, frequency length)")
-    ap.add_argument("--sweep", type=Path, default=SWEEP,
-                    help="with --sweep-error: the sweep dataset (hapticrom generate --space "
-                    f"datasets/spaces/default-sweep.toml; default {SWEEP})")
+    ap.add_argument("--sweep", type=Path,
+                    help="with --sweep-error: a dataset of datasets/spaces/default-sweep.toml "
+                    "(hapticrom generate --space datasets/spaces/default-sweep.toml --n 8192 "
+                    "--out DIR) holding the designs of bench/data/sweep-error-designs.txt")
     ap.add_argument("--error-check", action="store_true",
                     help="only check the surrogate's error at the true inputs of the study's "
                     "measurements against the error model (probability integral transform)")
@@ -293,6 +298,9 @@ def main() -> None:
             print("\n".join(error_check(subjects, predictor, s)))
         return
     if args.sweep_error:
+        if args.sweep is None:
+            ap.error("--sweep-error needs --sweep DIR: a dataset of "
+                     "datasets/spaces/default-sweep.toml")
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
             print("\n".join(fit_sweep_error(predictor, s, args.sweep)), flush=True)

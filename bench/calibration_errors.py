@@ -202,14 +202,20 @@ def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
 #: the sweep dataset the cross-frequency structure is measured on (FE solves of the same space
 #: and solver as datasets/default, each design at every 2 Hz in 100-250 Hz; not trained on:
 #: ``hapticrom generate --space datasets/spaces/default-sweep.toml``); --sweep DIR for another
-SWEEP = Path("/work/sweepdata/default-sweep")
-#: the first designs written (in the order of its parts, which are immutable: the dataset was
-#: still growing, so this set is fixed)
-SWEEP_DESIGNS = 1600
+#: the sweep designs the error model was measured on, by ``sample_index`` (a fixed set: the
+#: first 1,600 a generation of datasets/spaces/default-sweep.toml wrote; any dataset of that
+#: space holding them reproduces the fit)
+SWEEP_DESIGNS_FILE = Path(__file__).resolve().parent / "data" / "sweep-error-designs.txt"
 SWEEP_STEP_HZ = 10.0  # its frequencies used: the study's 10 Hz grid
 
 
-def sweep_residuals(predictor, path: Path = SWEEP, n_designs: int = SWEEP_DESIGNS
+def sweep_design_indices(path: Path = SWEEP_DESIGNS_FILE) -> np.ndarray:
+    """The ``sample_index`` of the designs listed in ``path`` (comment lines start with #)."""
+    lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    return np.array([int(ln) for ln in lines], dtype=np.int64)
+
+
+def sweep_residuals(predictor, path: Path
                     ) -> tuple[np.ndarray, np.ndarray, dict[str, tuple[np.ndarray, np.ndarray]]]:
     """The surrogate's error on the sweep dataset at the frequencies of a 10 Hz grid and the
     profile points it shares with the model (every 2 mm, 0-20 mm from the edge): (frequencies
@@ -218,7 +224,13 @@ def sweep_residuals(predictor, path: Path = SWEEP, n_designs: int = SWEEP_DESIGN
     from surrogate.data.store import Store
 
     df = Store.open(path).read()
-    df = df[df["status"] == "ok"].head(n_designs)
+    want = sweep_design_indices()
+    df = df[(df["status"] == "ok") & df["sample_index"].isin(want)]
+    df = df.sort_values("sample_index", kind="stable").reset_index(drop=True)
+    if len(df) < want.size:
+        raise ValueError(f"--sweep {path}: holds {len(df)} of the {want.size} designs of "
+                         f"{SWEEP_DESIGNS_FILE.name}; extend it with `hapticrom generate --space "
+                         "datasets/spaces/default-sweep.toml --n 8192 --out DIR`")
     n = len(df)
     freq = np.asarray(df["sweep_frequency_hz"].iloc[0], dtype=float)
     keep = np.flatnonzero(np.isclose(np.mod(freq, SWEEP_STEP_HZ), 0.0))
@@ -317,7 +329,7 @@ def fit_t_per_frequency(x: np.ndarray, corr: np.ndarray) -> tuple[float, np.ndar
     return float(np.exp(t.x[0])), np.exp(t.x[1:])
 
 
-def fit_sweep_error(predictor, component: str, path: Path = SWEEP) -> list[str]:
+def fit_sweep_error(predictor, component: str, path: Path) -> list[str]:
     """The surrogate's error structure across frequency, per output a ``component`` sensor
     reads (calibration.fit.SURROGATE_ERROR_T): the correlation length along the profile
     (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid); on the sweep
