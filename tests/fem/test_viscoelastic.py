@@ -161,3 +161,83 @@ def test_one_factorisation_and_relaxation_checks() -> None:
     with pytest.raises(ValueError, match=r"relaxation\.matrix"):
         solve_transient(m, k, np.ones(1), np.ones_like, 1e-4, 5,
                         relaxation=Relaxation(sp.eye(2), fit.tau_s, fit.g))
+
+
+# ---------------------------------------------------------------- the scene switch and the FE
+
+
+def _unit_transient(damping: str | None, **analysis) -> dict:
+    from fem.scene import load_scene, scene_to_dict
+
+    d = scene_to_dict(load_scene("examples/unit-transient.toml"))
+    d["mesh"].update(order=1, near_size_mm=1.5, far_size_mm=4.0)
+    d["unit"]["motor"]["tau_spinup_ms"] = 2.0  # at speed within a few ms
+    d["analysis"].update({"time_step_ms": 0.1, "duration_ms": 60.0,
+                          "voltage_schedule": [[0.0, 3.3]], **analysis})
+    if damping is not None:
+        d["analysis"]["damping"] = damping
+    return d
+
+
+def test_scene_switch_keeps_default_hashes_and_names_bad_values() -> None:
+    from fem.scene import SceneError, scene_from_dict, scene_hash, scene_to_dict
+    from fem.scene.usage import unused_fields
+
+    default = scene_from_dict(_unit_transient(None))
+    assert default.analysis.damping == "viscous_at_drive"
+    assert "damping" not in scene_to_dict(default)["analysis"]  # old scenes keep their hash
+    assert scene_hash(scene_from_dict(_unit_transient("viscous_at_drive"))) == scene_hash(default)
+    band = scene_from_dict(_unit_transient("hysteretic_band"))
+    assert scene_to_dict(band)["analysis"]["damping"] == "hysteretic_band"
+    assert scene_from_dict(scene_to_dict(band)) == band
+    harmonic = scene_from_dict({"analysis": {"kind": "harmonic", "damping": "hysteretic_band"}})
+    assert "analysis.damping" in unused_fields(harmonic)
+    with pytest.raises(SceneError, match="viscous_at_drive") as err:
+        scene_from_dict(_unit_transient("maxwell"))
+    assert err.value.field == "analysis.damping"
+    d = _unit_transient("hysteretic_band")
+    d["tissue"]["layer"][1]["loss_factor"] = 0.8
+    with pytest.raises(SceneError, match="allowed loss_factor <=") as err:
+        scene_from_dict(d)
+    assert err.value.field == "tissue.layer[1].loss_factor"
+
+
+def test_fe_transient_with_the_band_model_settles_to_its_harmonic_response() -> None:
+    """A coarse unit transient at rated speed (120 Hz) with damping = "hysteretic_band"
+    settles to the harmonic solve of the same matrices with the band modulus
+    K + (z - 1) K_eta, z = 1 - c + sum_k g_k i w tau_k / (1 + i w tau_k), within 1 %."""
+    import scipy.sparse.linalg as spla
+
+    from fem import elements, probes, results, transient_analysis
+    from fem.assembly import assemble_matrix, assemble_vector
+    from fem.problem import build_problem, drive_omega
+    from fem.scene import scene_from_dict
+    from fem.solve import OperatorLog, damping_layer_matrices
+
+    scene = scene_from_dict(_unit_transient("hysteretic_band"))
+    problem = build_problem(scene)
+    log = OperatorLog()
+    pts = probes.output_points(scene, problem)
+    h = transient_analysis.run(scene, problem, pts.stencil, pts.radii, log)
+    assert "hysteretic damping (Prony band)[n=1]" in log.built
+    assert not any("Rayleigh" in name for name in log.built)
+
+    w = drive_omega(scene)
+    s = transient_analysis.transient_system(problem, w, OperatorLog(), "hysteretic_band")
+    d = problem.domain
+    g = elements.gauss_data(d.mesh)
+    C_layer = assemble_matrix(s.dm, damping_layer_matrices(d, g, problem.mode,
+                                                           d.element_property("density")))
+    z = complex(default_fit().modulus_factor(w, 1.0))
+    A = s.K + (z - 1 + default_fit().c) * s.K_eta - w**2 * s.M + 1j * w * C_layer
+    force = assemble_vector(s.dm, problem.load) * scene.unit.motor.unbalance_kg_m * w**2
+    u = spla.spsolve(A.tocsc(), force.astype(complex))
+    vals = results.interpolate(pts.stencil, s.dm.nodal(s.dm.expand(u)))
+    n = pts.r_probe.size
+    harmonic = np.sqrt(np.sum(np.abs(vals[[n, n + 1]]) ** 2, axis=1))
+    T = 2 * np.pi / w
+    sel = h.t > h.t[-1] - 2 * T
+    basis = np.column_stack([np.cos(w * h.t[sel]), np.sin(w * h.t[sel]), np.ones(sel.sum())])
+    coef = np.linalg.lstsq(basis, h.u[sel][:, [n, n + 1]].reshape(sel.sum(), -1), rcond=None)[0]
+    settled = np.sqrt(np.sum(np.hypot(coef[0], coef[1]).reshape(2, 3) ** 2, axis=1))
+    assert settled == pytest.approx(harmonic, rel=0.01)
