@@ -15,6 +15,14 @@ solves on the transient's own matrices (``bench.rom_steady_levels.steady_solves`
 frequency response (``rayleigh``, ``band``: what the transient should settle to; the
 difference is time-stepping error and what has not settled). ``drift`` is the change of the
 fitted amplitude between the last two periods and the two before (how settled the run is).
+
+``--harmonic-only`` skips the transients and compares the two models' own frequency responses
+(the steady states their transients settle to) with the hysteretic one, on the same matrices,
+in seconds per design; ``--re-weight`` then fits the band model with another weight of the
+real part (``fem.viscoelastic.fit_band``), as the choice of the default was measured:
+
+    python bench/bench_transient_damping.py --harmonic-only --samples 43 53 124 213 \
+        --re-weight 0.5 1 2 4
 """
 
 from __future__ import annotations
@@ -108,6 +116,35 @@ def measure(sample: int, f_hz: float, duration_ms: float) -> dict[str, Any]:
     return rec
 
 
+def harmonic_only(sample: int, f_hz: float, weights: list[float],
+                  anchored: bool = False) -> dict[str, Any]:
+    """Each model's steady response vs the hysteretic one at ``f_hz``: ``viscous_at_drive``
+    and ``band_w<weight>`` for each real-part weight (and ``band_w<weight>_at_rated``, held
+    to 1 + i eta at the rated speed, with ``anchored``)."""
+    from rom_steady_levels import steady_solves
+
+    from fem.viscoelastic import fit_band
+
+    row = _dataset()[_dataset()["sample_index"] == sample].iloc[0]
+    omega = 2 * math.pi * f_hz
+    rec: dict[str, Any] = {"sample_index": sample, "f_hz": f_hz,
+                           "attachment": row["attachment"], "n_rings": int(row["n_rings"]),
+                           "tissue_eta": float(row["tissue_loss_factor"])}
+    fits = {f"band_w{w:g}": fit_band(re_weight=w) for w in weights}
+    if anchored:
+        from fem.problem import drive_omega
+        from fem.scene.io import scene_from_dict
+
+        rated = drive_omega(scene_from_dict(json.loads(row["scene_json"]))) / (2 * math.pi)
+        fits.update({f"band_w{w:g}_at_rated": fit_band(re_weight=w, anchor_hz=rated)
+                     for w in weights})
+    harm = steady_solves(row["scene_json"], omega, band=True, fits=fits)
+    rec["viscous_at_drive"] = {"vs_hyst": (harm["rayleigh"] / harm["hyst"] - 1).tolist()}
+    for name in fits:
+        rec[name] = {"vs_hyst": (harm[name] / harm["hyst"] - 1).tolist()}
+    return rec
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--samples", type=int, nargs="+", default=[43, 124, 213],
@@ -116,7 +153,18 @@ def main(argv: list[str] | None = None) -> int:
                     help="motor speeds, Hz")
     ap.add_argument("--duration-ms", type=float, default=120.0)
     ap.add_argument("--json", help="write the rows to this file")
+    ap.add_argument("--harmonic-only", action="store_true",
+                    help="compare the models' harmonic responses only (no transients)")
+    ap.add_argument("--re-weight", type=float, nargs="+", default=None,
+                    help="with --harmonic-only: band-model fits with these real-part weights")
+    ap.add_argument("--anchored", action="store_true",
+                    help="with --harmonic-only: also each fit held exact at the rated speed")
     args = ap.parse_args(argv)
+    if args.harmonic_only:
+        from fem.viscoelastic import RE_WEIGHT
+
+        return _harmonic_table(args.samples, args.freqs, args.re_weight or [RE_WEIGHT],
+                               args.json, args.anchored)
     rows = []
     for s in args.samples:
         for f in args.freqs:
@@ -134,6 +182,28 @@ def main(argv: list[str] | None = None) -> int:
         e = np.abs(np.array([r[m]["vs_hyst"] for r in rows]))
         print(f"{m}: median |FE / hyst - 1| centre/edge {np.median(e[:, 0]):.3f}/"
               f"{np.median(e[:, 1]):.3f}, max {e[:, 0].max():.3f}/{e[:, 1].max():.3f}")
+    return 0
+
+
+def _harmonic_table(samples: list[int], freqs: list[float], weights: list[float],
+                    out: str | None, anchored: bool = False) -> int:
+    rows = []
+    for s in samples:
+        for f in freqs:
+            r = harmonic_only(s, f, weights, anchored)
+            rows.append(r)
+            models = [k for k in r if isinstance(r[k], dict)]
+            print(f"{s:4d} {r['attachment']:5s} rings {r['n_rings']} eta {r['tissue_eta']:.2f}"
+                  f" f {f:5.0f}  " + "  ".join(f"{m} {r[m]['vs_hyst'][0]:+.3f}/"
+                                              f"{r[m]['vs_hyst'][1]:+.3f}" for m in models),
+                  flush=True)
+            if out:
+                Path(out).write_text(json.dumps(rows, indent=1) + "\n")
+    for m in models:
+        e = np.abs(np.array([r[m]["vs_hyst"] for r in rows]))
+        print(f"{m}: |steady / hyst - 1| median centre/edge {np.median(e[:, 0]):.3f}/"
+              f"{np.median(e[:, 1]):.3f} (all {np.median(e):.3f}), max {e[:, 0].max():.3f}/"
+              f"{e[:, 1].max():.3f}")
     return 0
 
 

@@ -43,12 +43,14 @@ sys.path.insert(0, str(ROOT))
 KINDS = ("rayleigh", "hyst", "nn", "nn_eq", "model")
 
 
-def steady_solves(scene_json: str, omega: float, band: bool = False) -> dict[str, np.ndarray]:
+def steady_solves(scene_json: str, omega: float, band: bool = False,
+                  fits: dict[str, Any] | None = None) -> dict[str, np.ndarray]:
     """Steady (center, edge) envelope magnitudes (um) of a transient scene at ``omega``
     (rad/s) with the transient's damping (``rayleigh``) and with hysteretic damping
     (``hyst``), both on the transient's own matrices, and the rated frequency (Hz). With
     ``band`` also ``band``: the modulus of the transient's ``"hysteretic_band"`` model
-    (``fem.viscoelastic``), the steady state such a transient tends to."""
+    (``fem.viscoelastic``), the steady state such a transient tends to; ``fits`` (name ->
+    ``BandFit``) replaces it with one output per named fit."""
     import scipy.sparse.linalg as spla
 
     from fem import elements, probes, results
@@ -76,9 +78,9 @@ def steady_solves(scene_json: str, omega: float, band: bool = False) -> dict[str
     out = {}
     systems = [("rayleigh", K - omega**2 * M + 1j * omega * C),
                ("hyst", K + 1j * K_eta - omega**2 * M + 1j * omega * C_layer)]
-    if band:
-        z = complex(default_fit().modulus_factor(omega, 1.0))  # 1 - c + shape, unit eta
-        systems.append(("band", K + (z - 1) * K_eta - omega**2 * M + 1j * omega * C_layer))
+    for name, fit in ((fits or {"band": default_fit()}) if band else {}).items():
+        z = complex(fit.modulus_factor(omega, 1.0))  # unit eta: 1 - c + the Prony sum
+        systems.append((name, K + (z - 1) * K_eta - omega**2 * M + 1j * omega * C_layer))
     for tag, A in systems:
         u = spla.spsolve(A.tocsc(), force.astype(complex))
         vals = results.interpolate(pts.stencil, dm.nodal(dm.expand(u)))

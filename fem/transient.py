@@ -23,6 +23,13 @@ The unknown solved at each step is the acceleration a_{n+1}; the effective matri
 (sparse LU) and reused by every step, so a step costs three sparse mat-vecs and one pair of
 triangular solves on an (ndof, k) block of right-hand sides.
 
+Relaxation (Maxwell) terms, optional: internal forces q_k with tau_k dq_k/dt + q_k =
+g_k tau_k K_eta du/dt add to K u (``fem.viscoelastic``: the band model of hysteretic loss).
+Each q_k is advanced exactly for u linear over the step and enters the equilibrium at
+t_{n+1-alpha_f} like the other forces; its dependence on u_{n+1} is a constant multiple of
+K_eta added to K in the effective matrix, so the factorisation is still done once, and a step
+costs one more sparse product (K_eta times the displacement increment).
+
 Batched loads: ``load_vectors`` is (ndof, k) and ``load_history(t)`` maps step times (nt,) to
 amplitudes (nt, k); column j of the state is the response to ``load_vectors[:, j] *
 load_history(t)[:, j]`` alone. The total response to ``load_vectors @ load_history(t)`` is the

@@ -104,12 +104,13 @@ class BandFit:
 
 
 def fit_band(f_lo_hz: float = BAND_HZ[0], f_hi_hz: float = BAND_HZ[1], n_terms: int = N_TERMS,
-             re_weight: float = RE_WEIGHT) -> BandFit:
+             re_weight: float = RE_WEIGHT, anchor_hz: float | None = None) -> BandFit:
     """Fit the Prony series to 1 + i eta (unit eta) on [f_lo_hz, f_hi_hz] [Hz].
 
     Non-negative least squares over ``g`` and ``c`` of the residuals Im - 1 and
     ``re_weight`` (Re - 1) at 200 log-spaced frequencies; tau_k = 1 / (2 pi f_k) with f_k
-    log-spaced from f_lo_hz to f_hi_hz.
+    log-spaced from f_lo_hz to f_hi_hz. With ``anchor_hz`` [Hz] the fit is also held to
+    1 + i eta at that frequency (two rows weighted 1000: exact to about 1e-4).
 
     Raises:
         ValueError naming the argument when the band or the number of terms is out of range.
@@ -128,6 +129,13 @@ def fit_band(f_lo_hz: float = BAND_HZ[0], f_hi_hz: float = BAND_HZ[1], n_terms: 
     zeros, ones = np.zeros((_N_FIT, 1)), np.ones((_N_FIT, 1))
     A = np.vstack([np.hstack([im, zeros]), re_weight * np.hstack([re, -ones])])
     b = np.concatenate([np.ones(_N_FIT), np.zeros(_N_FIT)])
+    if anchor_hz is not None:
+        if not (math.isfinite(anchor_hz) and anchor_hz > 0):
+            raise ValueError(f"anchor_hz must be finite and > 0 Hz, got {anchor_hz!r}")
+        xa = 2 * np.pi * anchor_hz * tau
+        A = np.vstack([A, 1e3 * np.append(xa / (1 + xa * xa), 0.0),
+                       1e3 * np.append(xa * xa / (1 + xa * xa), -1.0)])
+        b = np.concatenate([b, [1e3, 0.0]])
     sol, _ = nnls(A, b)
     g, c = sol[:-1], float(sol[-1])
     fit = BandFit(float(f_lo_hz), float(f_hi_hz), tau, g, c, 0.0, 0.0)
