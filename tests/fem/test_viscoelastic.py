@@ -52,6 +52,13 @@ def test_kramers_kronig_forbids_a_flat_loss_with_a_flat_stiffness() -> None:
     assert narrow.im_error < 0.02 and narrow.re_error < default_fit().re_error / 4
 
 
+def test_anchored_fit_is_exact_at_its_anchor() -> None:
+    fit = fit_band(anchor_hz=120.0)
+    z = complex(fit.modulus_factor(2 * np.pi * 120.0, 1.0))
+    assert abs(z - (1 + 1j)) < 1e-3
+    assert np.all(fit.g >= 0) and fit.c >= 0
+
+
 def test_fit_arguments_are_checked() -> None:
     with pytest.raises(ValueError, match="f_lo_hz"):
         fit_band(300.0, 20.0)
@@ -59,6 +66,8 @@ def test_fit_arguments_are_checked() -> None:
         fit_band(n_terms=0)
     with pytest.raises(ValueError, match="re_weight"):
         fit_band(re_weight=-1.0)
+    with pytest.raises(ValueError, match="anchor_hz"):
+        fit_band(anchor_hz=0.0)
 
 
 # ---------------------------------------------------------------- single DOF in time
