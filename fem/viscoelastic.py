@@ -17,7 +17,8 @@ loss factor), the internal force is (K - c K_eta) u + sum_k q_k with
 
     tau_k dq_k/dt + q_k = g_k tau_k K_eta du/dt,
 
-integrated exactly for u linear over a time step (:class:`fem.transient.Relaxation`).
+integrated exactly for u linear over a time step (:class:`Relaxation`, :class:`MemoryState`,
+used by :func:`fem.transient.solve_transient`).
 
 What it cannot do: a causal modulus obeys the Kramers-Kronig relations, so a loss near eta over
 a band forces the real part to rise with frequency, by about (2 / pi) eta per unit of
@@ -28,8 +29,8 @@ docs/model.md quotes them with the steady amplitudes this gives against the hyst
 harmonic solve).
 
 The band: 20-300 Hz (:data:`BAND_HZ`) covers the motor's speed range (30-250 Hz; a spin-up
-passes through all of it, and the rotating force m e omega^2 is below (30/120)^2 = 6 % of the
-rated one under 30 Hz) with a margin at both ends for the relaxation terms' tails.
+passes through all of it, and under 30 Hz the rotating force m e omega^2 is under
+(30/120)^2, about 6 %, of the rated one) with a margin at both ends for the relaxation terms' tails.
 """
 
 from __future__ import annotations
@@ -100,13 +101,6 @@ class BandFit:
         above it the slow response is too soft to stand for the hysteretic material, and at
         1 / c the solid loses its static stiffness."""
         return math.inf if self.c <= 0 else 0.9 / self.c
-
-    def step_coefficients(self, dt: float) -> tuple[NDArray, NDArray]:
-        """(decay, gain) per term for a step dt [s]: q_{n+1} = decay q_n + gain K_eta
-        (u_{n+1} - u_n), exact for u linear over the step; decay = exp(-dt / tau) [-],
-        gain = g tau (1 - decay) / dt [-]."""
-        decay = np.exp(-dt / self.tau_s)
-        return decay, self.g * self.tau_s * (-np.expm1(-dt / self.tau_s)) / dt
 
 
 def fit_band(f_lo_hz: float = BAND_HZ[0], f_hi_hz: float = BAND_HZ[1], n_terms: int = N_TERMS,
@@ -189,7 +183,7 @@ class MemoryState:
     scheme (``fem.transient``).
 
     Over a step q_{n+1} = e_k q_n + h_k K_eta (u_{n+1} - u_n) (exact for u linear over the
-    step; e_k, h_k from :meth:`BandFit.step_coefficients`). The scheme evaluates forces at
+    step: e_k = exp(-dt / tau_k), h_k = g_k tau_k (1 - e_k) / dt). The scheme evaluates forces at
     t_{n+1-alpha_f}, q_{n+1-alpha_f} = (1-alpha_f) q_{n+1} + alpha_f q_n, so the part of
     sum_k q_{n+1-alpha_f} that depends on u_{n+1} is (1-alpha_f) H K_eta u_{n+1},
     H = sum_k h_k: a stiffness ``shift * K_eta`` (shift = H) added to K in the effective matrix
