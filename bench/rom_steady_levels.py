@@ -43,10 +43,14 @@ sys.path.insert(0, str(ROOT))
 KINDS = ("rayleigh", "hyst", "nn", "nn_eq", "model")
 
 
-def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
+def steady_solves(scene_json: str, omega: float, band: bool = False,
+                  fits: dict[str, Any] | None = None) -> dict[str, np.ndarray]:
     """Steady (center, edge) envelope magnitudes (um) of a transient scene at ``omega``
     (rad/s) with the transient's damping (``rayleigh``) and with hysteretic damping
-    (``hyst``), both on the transient's own matrices, and the rated frequency (Hz)."""
+    (``hyst``), both on the transient's own matrices, and the rated frequency (Hz). With
+    ``band`` also ``band``: the modulus of the transient's ``"hysteretic_band"`` model
+    (``fem.viscoelastic``), the steady state such a transient tends to; ``fits`` (name ->
+    ``BandFit``) replaces it with one output per named fit."""
     import scipy.sparse.linalg as spla
 
     from fem import elements, probes, results
@@ -54,7 +58,8 @@ def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
     from fem.problem import build_problem, drive_omega
     from fem.scene.io import scene_from_dict
     from fem.solve import OperatorLog, damping_layer_matrices
-    from fem.transient_analysis import system_matrices
+    from fem.transient_analysis import loss_matrix, system_matrices
+    from fem.viscoelastic import default_fit
 
     scene = scene_from_dict(json.loads(scene_json))
     problem = build_problem(scene)
@@ -64,15 +69,19 @@ def steady_solves(scene_json: str, omega: float) -> dict[str, np.ndarray]:
     g = elements.gauss_data(d.mesh)
     Ke = elements.stiffness(g, problem.mode, d.element_property("mu"),
                             d.element_property("kappa"))
-    K_eta = assemble_matrix(dm, Ke * d.element_property("loss_factor")[:, None, None])
+    K_eta = loss_matrix(dm, Ke, d.element_property("loss_factor"))
     C_layer = assemble_matrix(dm, damping_layer_matrices(d, g, problem.mode,
                                                          d.element_property("density")))
     force = assemble_vector(dm, problem.load) * scene.unit.motor.unbalance_kg_m * omega**2
     pts = probes.output_points(scene, problem)
     n = pts.r_probe.size
     out = {}
-    for tag, A in (("rayleigh", K - omega**2 * M + 1j * omega * C),
-                   ("hyst", K + 1j * K_eta - omega**2 * M + 1j * omega * C_layer)):
+    systems = [("rayleigh", K - omega**2 * M + 1j * omega * C),
+               ("hyst", K + 1j * K_eta - omega**2 * M + 1j * omega * C_layer)]
+    for name, fit in ((fits or {"band": default_fit()}) if band else {}).items():
+        z = complex(fit.modulus_factor(omega, 1.0))  # unit eta: 1 - c + the Prony sum
+        systems.append((name, K + (z - 1) * K_eta - omega**2 * M + 1j * omega * C_layer))
+    for tag, A in systems:
         u = spla.spsolve(A.tocsc(), force.astype(complex))
         vals = results.interpolate(pts.stencil, dm.nodal(dm.expand(u)))
         out[tag] = np.sqrt(np.sum(np.abs(vals[[n, n + 1]]) ** 2, axis=1)) * 1e6

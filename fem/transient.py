@@ -23,6 +23,13 @@ The unknown solved at each step is the acceleration a_{n+1}; the effective matri
 (sparse LU) and reused by every step, so a step costs three sparse mat-vecs and one pair of
 triangular solves on an (ndof, k) block of right-hand sides.
 
+Relaxation (Maxwell) terms, optional: internal forces q_k with tau_k dq_k/dt + q_k =
+g_k tau_k K_eta du/dt add to K u (``fem.viscoelastic``: the band model of hysteretic loss).
+Each q_k is advanced exactly for u linear over the step and enters the equilibrium at
+t_{n+1-alpha_f} like the other forces; its dependence on u_{n+1} is a constant multiple of
+K_eta added to K in the effective matrix, so the factorisation is still done once, and a step
+costs one more sparse product (K_eta times the displacement increment).
+
 Batched loads: ``load_vectors`` is (ndof, k) and ``load_history(t)`` maps step times (nt,) to
 amplitudes (nt, k); column j of the state is the response to ``load_vectors[:, j] *
 load_history(t)[:, j]`` alone. The total response to ``load_vectors @ load_history(t)`` is the
@@ -42,6 +49,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import linalg
+from .viscoelastic import MemoryState, Relaxation
 
 MAX_STEPS = 10**8
 """Upper bound on ``n_steps`` (guards against runaway loops from unit mistakes)."""
@@ -112,6 +120,7 @@ def solve_transient(
     n_steps: int,
     *,
     C: sp.spmatrix | sp.sparray | np.ndarray | None = None,
+    relaxation: Relaxation | None = None,
     rho_inf: float = 0.9,
     u0: np.ndarray | None = None,
     v0: np.ndarray | None = None,
@@ -132,6 +141,10 @@ def solve_transient(
         dt: time step, s, finite and > 0 (fixed for the run).
         n_steps: number of steps, 1 <= n_steps <= 10**8.
         C: damping matrix (N s/m), (ndof, ndof), or None for no damping.
+        relaxation: Maxwell terms (``fem.viscoelastic.Relaxation``) adding the internal
+            force sum_k q_k, tau_k dq_k/dt + q_k = g_k tau_k K_eta du/dt (q_k = 0 at t0), to
+            K u; None for none. The effective matrix gains a constant multiple of K_eta
+            (still one factorisation).
         rho_inf: spectral radius at infinite frequency in [0, 1]; 1 = no numerical damping
             (trapezoidal rule), smaller values damp the spurious high-frequency modes.
         u0, v0: initial displacement (m) and velocity (m/s), (ndof, k), or (ndof,) which is
@@ -173,6 +186,11 @@ def solve_transient(
     amp = stream.amplitude(0)
 
     a, n_fact = _initial_acceleration(mass, stiff, damp, loads * amp, u, v)
+    memory = None
+    if relaxation is not None:  # q_k = 0 at t0: the initial acceleration sees K alone
+        loss = _as_sparse_square("relaxation.matrix", relaxation.matrix, ndof)
+        memory = MemoryState(relaxation, dt, params.alpha_f, u, linalg.product(loss, k))
+        stiff = stiff + memory.shift * loss  # the part of sum_k q_k acting on u_{n+1-af}
     lu = _factorize(_effective_matrix(mass, stiff, damp, params, dt), "effective matrix")
     n_fact += 1
 
@@ -213,9 +231,14 @@ def solve_transient(
             if damp_x is not None:
                 damp_x.accumulate(v + (cv_a - g * cs_c) * a, rhs, -1.0)
             rhs -= g * rhs_prev
+        if memory is not None:
+            memory.subtract_known(rhs)
         a_next = lu.solve(rhs)
         rhs_prev = rhs
-        u = u + dt * v + (dt * dt) * ((0.5 - beta) * a + beta * a_next)
+        du = dt * v + (dt * dt) * ((0.5 - beta) * a + beta * a_next)
+        u = u + du
+        if memory is not None:
+            memory.advance(du)
         v = v + dt * ((1.0 - gamma) * a + gamma * a_next)
         a, amp = a_next, amp_next
         step = n + 1

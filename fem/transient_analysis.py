@@ -10,8 +10,14 @@ by 90 degrees, so on the theta = 0 meridian
 where ^x and ^y denote the two columns. In steady state this reproduces the harmonic amplitudes.
 Time integration is generalised-alpha with one factorisation (``fem.transient``); the outer side
 and base absorb through a graded damping layer (``fem.absorbers.DampingLayer``). Hysteretic loss
-factors, which have no causal time-domain form, become stiffness-proportional damping
-C = (eta / omega_ref) K with the same loss per cycle at the reference frequency.
+factors have no causal time-domain form; ``[analysis] damping`` chooses what stands for them,
+both built on the loss matrix K_eta = sum_m eta_m K_m (:func:`loss_matrix`):
+
+- ``"viscous_at_drive"`` (default): stiffness-proportional damping C = K_eta / omega_ref, the
+  same loss per cycle at the reference frequency (the motor's rated speed), eta f / f_ref at
+  another frequency f;
+- ``"hysteretic_band"``: a Prony series following 1 + i eta over 20-300 Hz
+  (``fem.viscoelastic``): stiffness K - c K_eta and relaxation terms acting through K_eta.
 """
 
 from __future__ import annotations
@@ -28,6 +34,33 @@ from .problem import Problem, drive_omega
 from .scene import Scene
 from .solve import OperatorLog, damping_layer_matrices
 from .transient import solve_transient
+from .viscoelastic import Relaxation, default_fit
+
+DAMPING_MODELS = ("viscous_at_drive", "hysteretic_band")
+"""Choices of ``[analysis] damping`` (see the module docstring)."""
+
+
+@dataclass(frozen=True, eq=False)
+class TransientSystem:
+    """The reduced real sparse operators of a transient (SI: K and K_eta in N/m, M in kg,
+    C in N s/m) and the dof map.
+
+    Attributes:
+        dm: dof map of the problem's mode.
+        K: stiffness handed to the integrator (K - c K_eta for the band model).
+        M: mass.
+        C: viscous damping (the damping layer, plus K_eta / omega_ref for the viscous model),
+            or None.
+        K_eta: loss matrix sum_m eta_m K_m, or None without loss factors.
+        relaxation: the band model's Maxwell terms, or None.
+    """
+
+    dm: object
+    K: object
+    M: object
+    C: object
+    K_eta: object
+    relaxation: Relaxation | None
 
 
 @dataclass(frozen=True)
@@ -51,8 +84,26 @@ class Histories:
         return np.abs(self.u[self.t >= start]).max(axis=0)
 
 
+def loss_matrix(dm, Ke: NDArray, eta: NDArray):
+    """K_eta = sum_m eta_m K_m [N/m]: the element stiffness matrices ``Ke`` (n_el, nd, nd)
+    times each element's loss factor ``eta`` (n_el,), assembled. The harmonic solver's
+    hysteretic operator is K + i K_eta on the same elements (``fem.solve``)."""
+    return assemble_matrix(dm, Ke * eta[:, None, None])
+
+
 def system_matrices(problem: Problem, omega_ref: float, log: OperatorLog):
-    """Reduced K, M, C (real, sparse) and the dof map of the problem's mode."""
+    """Reduced K, M, C (real, sparse) and the dof map of the problem's mode, with the loss
+    factors as viscous damping K_eta / omega_ref (``"viscous_at_drive"``)."""
+    s = transient_system(problem, omega_ref, log)
+    return s.dm, s.K, s.M, s.C
+
+
+def transient_system(problem: Problem, omega_ref: float, log: OperatorLog,
+                     damping: str = "viscous_at_drive") -> TransientSystem:
+    """The operators of the problem's transient with the loss model ``damping`` (one of
+    :data:`DAMPING_MODELS`); ``omega_ref`` [rad/s] is the viscous model's reference."""
+    if damping not in DAMPING_MODELS:
+        raise ValueError(f"damping must be one of {DAMPING_MODELS}, got {damping!r}")
     d, mode = problem.domain, problem.mode
     dm = build_dofmap(d.mesh, mode, d.fixed(), ties=d.ties)
     g = elements.gauss_data(d.mesh)
@@ -66,16 +117,23 @@ def system_matrices(problem: Problem, omega_ref: float, log: OperatorLog):
         log.add(name, mode)
     M = assemble_matrix(dm, elements.mass(g, mode, density))
     log.add("mass", mode)
-    C = None
+    C = K_eta = relaxation = None
     eta = d.element_property("loss_factor")
     if np.any(eta > 0):
-        C = assemble_matrix(dm, Ke * (eta / omega_ref)[:, None, None])
-        log.add("hysteretic damping (Rayleigh)", mode)
+        K_eta = loss_matrix(dm, Ke, eta)
+        if damping == "viscous_at_drive":
+            C = K_eta * (1.0 / omega_ref)
+            log.add("hysteretic damping (Rayleigh)", mode)
+        else:
+            fit = default_fit()
+            K = K - fit.c * K_eta
+            relaxation = Relaxation.from_fit(K_eta, fit)
+            log.add("hysteretic damping (Prony band)", mode)
     if d.damping is not None:
         C_layer = assemble_matrix(dm, damping_layer_matrices(d, g, mode, density))
         C = C_layer if C is None else C + C_layer
         log.add("damping layer", mode)
-    return dm, K, M, C
+    return TransientSystem(dm, K, M, C, K_eta, relaxation)
 
 
 def load_history(scene: Scene, problem: Problem):
@@ -91,7 +149,8 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
     about 200 times per run."""
     a = scene.analysis
     omega_ref = drive_omega(scene)
-    dm, K, M, C = system_matrices(problem, omega_ref, log)
+    system = transient_system(problem, omega_ref, log, a.damping)
+    dm = system.dm
     nodes, weights = stencil
     used = np.unique(nodes)
     ndpn = dm.dofs_per_node
@@ -103,7 +162,8 @@ def run(scene: Scene, problem: Problem, stencil: tuple[NDArray, NDArray], radii:
     f = assemble_vector(dm, problem.load)
     dt = a.time_step_s
     n_steps = max(1, round(a.duration_ms / a.time_step_ms))
-    res = solve_transient(M, K, np.repeat(f[:, None], k, axis=1), history, dt, n_steps, C=C,
+    res = solve_transient(system.M, system.K, np.repeat(f[:, None], k, axis=1), history, dt,
+                          n_steps, C=system.C, relaxation=system.relaxation,
                           rho_inf=a.rho_inf, record_dofs=record,
                           record_every=scene.output.history_every,
                           **_progress_hook(progress, n_steps))

@@ -13,7 +13,8 @@ commented files)::
       [unit.board]      thickness_mm, diameter_mm, material, E_kPa, density_kg_m3, nu
       [unit.pogo]       count, radius_mm, stiffness_N_m, length_mm, travel_mm, tip_diameter_mm
       [unit.actuator]   force_N
-    [analysis]          kind, frequency_hz, time_step_ms, duration_ms, rho_inf, voltage_schedule
+    [analysis]          kind, frequency_hz, time_step_ms, duration_ms, rho_inf, voltage_schedule,
+                        damping
     [mesh]              near_size_mm, near_radius_mm, far_size_mm, order, follow_wavelength,
                         cells_r, cells_z (optional fixed cells per segment)
     [output]            radii_mm, profile_step_mm, profile_length_mm, history_every

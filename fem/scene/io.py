@@ -8,7 +8,8 @@ full inline table. ``[effects]`` keeps only the keys set to true or false (None 
 left out when all are auto; ``[unit]`` is left out when the scene has no unit, and
 ``[unit.actuator]`` unless the load is a normal actuator (or the actuator is not the default);
 an actuator's own optional table (``[unit.lra]``) only when it was given, so scenes without it
-keep their hashes.
+keep their hashes; for the same reason ``analysis.damping`` is written only when it is not
+the default.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from fieldspec import Context, Spec, is_bool
 from fieldspec.toml import dumps, read_toml_file
 
 from ..actuators import ACTUATORS
-from .model import SCENE_CHECKS, Scene, SceneError
+from .model import SCENE_CHECKS, Analysis, Scene, SceneError
 from .schedule import Schedule
 from .tables import LAYER, RING, SUBARRAYS, TABLES, UNIT, UNIT_KEYS, UNIT_PARTS
 from .unit_model import Ring, Unit
@@ -124,6 +125,8 @@ def scene_to_dict(scene: Scene) -> dict[str, dict[str, Any]]:
         table = _table_to_dict(obj, specs)
         if name == "analysis" and obj.kind == "sweep":  # the band, as read
             table["frequency_hz"] = [float(f) for f in obj.frequencies_hz]
+        if name == "analysis" and obj.damping == Analysis.damping:  # default: not written
+            del table["damping"]
         if name in ("effects", "mesh"):  # auto effects, absent cell counts: TOML has no null
             table = {key: value for key, value in table.items() if value is not None}
             if not table:

@@ -163,6 +163,12 @@ class Analysis:
     transient). Transient: step and duration [ms], generalised-alpha spectral radius
     ``rho_inf`` [-], and the ERM drive as (t_ms, volts) steps, each held until the next.
 
+    ``damping`` chooses how a transient stands in for the hysteretic loss factors, which have
+    no causal time-domain form (``fem.transient_analysis``): ``"viscous_at_drive"`` (default,
+    viscous damping with the loss eta at the rated speed, eta f / f_rated elsewhere) or
+    ``"hysteretic_band"`` (a Prony series following 1 + i eta over 20-300 Hz,
+    ``fem.viscoelastic``). Harmonic analyses and sweeps use the loss factors themselves.
+
     A sweep (``kind = "sweep"``) answers at every frequency of ``frequencies_hz`` (Hz,
     strictly increasing); given ``frequency_hz`` as a list or tuple, that is the band, and
     ``frequency_hz`` becomes its highest frequency, the one the mesh is sized for."""
@@ -174,6 +180,7 @@ class Analysis:
     rho_inf: float = 0.9
     voltage_schedule: tuple[tuple[float, float], ...] = ((0.0, 3.3),)
     frequencies_hz: tuple[float, ...] = ()
+    damping: str = "viscous_at_drive"
 
     def __post_init__(self) -> None:
         band = self.frequency_hz

@@ -150,6 +150,7 @@ _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
         "duration_ms": Spec(float, MODEL, "[analysis.time_step_ms, 1e5]"),
         "rho_inf": Spec(float, MODEL, "[0, 1]"),
         "voltage_schedule": Spec(Schedule, MODEL, "[-50, 50]", reader=read_schedule),
+        "damping": Spec(str, MODEL, choices=("viscous_at_drive", "hysteretic_band")),
     }),
     "mesh": (MeshSettings, {
         "near_size_mm": Spec(float, MODEL, "(0, 100]"),

@@ -19,7 +19,7 @@ __all__ = ["effective_scene_dict", "unused_fields"]
 
 _LOAD_FIELDS = {kind: kind.actuator.load_fields for kind in LoadKind
                 if kind.actuator.load_fields}
-_TRANSIENT_FIELDS = ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule")
+_TRANSIENT_FIELDS = ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule", "damping")
 
 
 def unused_fields(scene: Scene) -> list[str]:

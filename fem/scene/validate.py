@@ -216,6 +216,7 @@ def validate(d: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     _check_counts(out)
     _check_band(out["analysis"])
     _check_motor_drive(out, ctx["load.kind"])
+    _check_band_damping(out)
     if out["analysis"]["kind"] == "transient" and "unit" not in out:
         units = " or ".join(f'"{k}"' for k in UNIT_LOAD_KINDS)
         raise SceneError("analysis.kind", 'analysis.kind = "transient" drives a haptic unit '
@@ -285,6 +286,32 @@ def _check_motor_drive(out: Mapping[str, Mapping[str, Any]], load_kind: Any) -> 
                          f"unit.motor.start_voltage_V < rated_voltage_V <= {top:g} V (the "
                          f"largest drive voltage: {ERM_MAX_VOLTAGE_V:g} V, or the peak of "
                          "analysis.voltage_schedule when higher)")
+
+
+def _check_band_damping(out: Mapping[str, Mapping[str, Any]]) -> None:
+    """The band model's relaxed modulus E (1 - c eta) must keep a tenth of E
+    (``fem.viscoelastic.BandFit.max_loss_factor``): every loss factor is checked, naming the
+    first one above the limit."""
+    a = out["analysis"]
+    if a["kind"] != "transient" or a.get("damping") != "hysteretic_band":
+        return
+    from ..viscoelastic import default_fit  # the fit is computed on first use
+
+    limit = default_fit().max_loss_factor()
+    solids = [(f"tissue.layer[{i}]", layer) for i, layer in enumerate(out["tissue"]["layer"])]
+    unit = out.get("unit") or {}
+    solids += [(f"unit.encapsulation[{i}]", ring) for i, ring in
+               enumerate(unit.get("encapsulation") or ()) if isinstance(ring, Mapping)]
+    if isinstance(unit.get("board"), Mapping):
+        solids.append(("unit.board", unit["board"]))
+    for where, solid in solids:
+        eta = solid.get("loss_factor")
+        if eta is not None and float(eta) > limit:
+            raise SceneError(f"{where}.loss_factor", f"{where}.loss_factor = {eta!r} is out "
+                             f"of range for analysis.damping = 'hysteretic_band': allowed "
+                             f"loss_factor <= {limit:.3g} (the band model's static modulus "
+                             "E (1 - c eta) keeps a tenth of E); use damping = "
+                             "'viscous_at_drive' for a larger loss")
 
 
 def make(cls: type, table: Mapping[str, Any]) -> Any:
