@@ -99,6 +99,11 @@ class Choice:
     def decode(self, pred: np.ndarray, sw: Sweeps) -> Answers:
         raise NotImplementedError
 
+    def targets(self, sw: Sweeps) -> np.ndarray:
+        """The exact targets of the query rows of ``sw`` in the fitted bases: decoding them
+        gives the choice's own floor (POD truncation), whatever the learner."""
+        raise NotImplementedError
+
 
 class Point(Choice):
     """Today's layout: (design, frequency) rows, ln magnitudes out (``per_design`` random
@@ -141,6 +146,13 @@ class Point(Choice):
         return Answers(np.exp(pred[:, 0]).reshape(n, n_f), np.exp(pred[:, 1]).reshape(n, n_f),
                        prof)
 
+    def targets(self, sw: Sweeps) -> np.ndarray:
+        y = [_ln(magnitude(sw.center)).reshape(-1, 1), _ln(magnitude(sw.edge)).reshape(-1, 1)]
+        if self.pod_ is not None and sw.profile is not None:
+            lp = _ln(magnitude(sw.profile)).reshape(len(sw) * sw.band.size, -1)
+            y.append(self.pod_.transform(lp))
+        return np.column_stack(y)
+
 
 class LnMagBand(Choice):
     """Whole ln |u(f)| curves out, through POD (``modes``; ``profile_modes`` for ln |profile|
@@ -155,13 +167,19 @@ class LnMagBand(Choice):
     def training(self, sw: Sweeps, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         y = np.column_stack([_ln(magnitude(sw.center)), _ln(magnitude(sw.edge))])
         self.pod_ = Pod(self.modes).fit(y)
-        out = [self.pod_.transform(y)]
         self.profile_pod_ = None
         if sw.profile is not None:
             lp = _ln(magnitude(sw.profile)).reshape(len(sw), -1)
             self.profile_pod_ = Pod(self.profile_modes).fit(lp)
-            out.append(self.profile_pod_.transform(lp))
-        return sw.x, np.column_stack(out)
+        return sw.x, self.targets(sw)
+
+    def targets(self, sw: Sweeps) -> np.ndarray:
+        y = np.column_stack([_ln(magnitude(sw.center)), _ln(magnitude(sw.edge))])
+        out = [self.pod_.transform(y)]
+        if self.profile_pod_ is not None and sw.profile is not None:
+            out.append(self.profile_pod_.transform(_ln(magnitude(sw.profile)).reshape(len(sw),
+                                                                                      -1)))
+        return np.column_stack(out)
 
     def decode(self, pred: np.ndarray, sw: Sweeps) -> Answers:
         k = self.pod_.basis_.shape[0]
@@ -234,6 +252,9 @@ class ComplexBand(Choice):
         if hasattr(self, "pod_"):
             del self.pod_
         return sw.x, self.encode(sw.center, sw.edge, sw.profile)
+
+    def targets(self, sw: Sweeps) -> np.ndarray:
+        return self.encode(sw.center, sw.edge, sw.profile)
 
     def decode(self, pred: np.ndarray, sw: Sweeps) -> Answers:
         c, e, p = self.decode_complex(pred, sw.band.size)

@@ -48,12 +48,33 @@ def score(pred: Answers, true: Answers) -> dict[str, float | None]:
     return out
 
 
+#: The learner name of a choice's floor: its exact test targets decoded (POD truncation only).
+FLOOR = "(projection)"
+
+
+def floors(train: Sweeps, test: Sweeps, choices: Sequence[Choice], seed: int = 0
+           ) -> list[dict[str, Any]]:
+    """One record per choice: the error of decoding the test designs' exact targets in the
+    bases fitted on ``train`` (what a perfect learner of that choice would reach)."""
+    truth = Answers.of(test)
+    out = []
+    for choice in choices:
+        x, y = choice.training(train, np.random.default_rng(seed))
+        pred = choice.decode(choice.targets(test), test)
+        out.append({"learner": FLOOR, "choice": choice.name, "train_rows": len(x),
+                    "rows_available": len(x), "targets": int(y.shape[1]), "fit_s": 0.0,
+                    "predict_s": 0.0, **score(pred, truth)})
+    return out
+
+
 def run(train: Sweeps, test: Sweeps, learners: Sequence[Learner], choices: Sequence[Choice],
         seed: int = 0, log: Callable[[str], None] = print) -> list[dict[str, Any]]:
-    """One record per (learner, choice): names, training rows used, fit and predict time [s],
-    and :func:`score` on ``test``."""
+    """One record per choice's floor (:func:`floors`) and per (learner, choice): names,
+    training rows used, fit and predict time [s], and :func:`score` on ``test``."""
     truth = Answers.of(test)
-    records = []
+    records = floors(train, test, choices, seed)
+    for rec in records:
+        log(row(rec))
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", module="sklearn")
         for learner in learners:
