@@ -3,12 +3,13 @@
 Issue 20, items 1 and 5 (:mod:`studies.output_choice`): every learner (scikit-learn MLP,
 shared-kernel GP, per-output GPs, LightGBM) on every output choice (``point``: today's
 magnitude at one frequency per row; ``lnmag``: POD of ln |u(f)| over the band; ``complex``: POD
-of the complex band response with its scale), trained on the same designs of a sweep dataset
+of the complex band response with its scale; ``poles``: a pole-residue form fitted per design
+by vector fitting), trained on the same designs of a sweep dataset
 and scored on the same test designs at every band frequency: a held-out split (``--test``) or
 another dataset (``--test-data``, e.g. fresh FE solves at another Sobol seed).
 
     python bench/bench_output_choice.py --data TRAIN [--test-data TEST] [--max-train N]
-        [--gp-rows N] [--learners mlp,gp,gp-each,lgbm] [--choices point,lnmag,complex]
+        [--gp-rows N] [--learners mlp,gp,gp-each,lgbm] [--choices point,lnmag,complex,poles]
         [--json out.json]
 
 Prints one markdown table (errors in %) and, with ``--json``, writes the records and the data
@@ -23,13 +24,14 @@ import sys
 import time
 from pathlib import Path
 
-from studies.output_choice import data, learners, representations, study
+from studies.output_choice import data, learners, poles, representations, study
 
 
 def _choices(args: argparse.Namespace) -> list[representations.Choice]:
     made = {"point": lambda: representations.Point(args.freqs_per_design, args.point_modes),
             "lnmag": lambda: representations.LnMagBand(args.modes, args.profile_modes),
-            "complex": lambda: representations.ComplexBand(args.modes, args.profile_modes)}
+            "complex": lambda: representations.ComplexBand(args.modes, args.profile_modes),
+            "poles": lambda: poles.PoleResidue(args.poles)}
     out = []
     for name in args.choices.split(","):
         if name not in made:
@@ -53,10 +55,13 @@ def main(argv: list[str] | None = None) -> int:
                     help="POD modes of the band choices' profile block")
     ap.add_argument("--point-modes", type=int, default=8,
                     help="POD modes of magnitude@f's profile at one frequency")
+    ap.add_argument("--poles", type=int, default=4,
+                    help="poles per design of the pole-residue choice (poles)")
     ap.add_argument("--no-profile", action="store_true", help="centre and edge only")
     ap.add_argument("--freqs-per-design", type=int, default=1,
                     help="training frequencies per design of the magnitude@f choice")
-    ap.add_argument("--learners", default="mlp,gp,gp-each,lgbm")
+    ap.add_argument("--learners", default="mlp,gp,gp-each,lgbm",
+                    help="comma-separated, or none (only each choice's projection floor)")
     ap.add_argument("--choices", default="point,lnmag,complex")
     ap.add_argument("--restarts", type=int, default=1,
                     help="gp-each: optimiser restarts of the leading targets")
@@ -68,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
         choices = _choices(args)
         made = [learners.make(n, args.seed, gp_rows=args.gp_rows, restarts=args.restarts,
                               lead=args.lead, trees=args.trees)
-                for n in args.learners.split(",")]
+                for n in args.learners.split(",") if args.learners != "none"]
         full, specs = data.load(args.data, profile=not args.no_profile)
         if args.test_data:
             train = full
