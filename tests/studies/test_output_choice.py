@@ -10,6 +10,7 @@ import pytest
 
 from studies.output_choice import learners, representations, run, table
 from studies.output_choice.data import Sweeps, split
+from studies.output_choice.poles import F_REF, PoleResidue, evaluate, vector_fit
 from studies.output_choice.representations import Answers, ComplexBand, LnMagBand, Point
 from studies.output_choice.study import FLOOR, score
 
@@ -122,3 +123,25 @@ def test_run_scores_every_learner_and_choice_on_the_test_designs():
 def test_choices_and_learners_are_listed_by_their_command_line_names():
     assert set(representations.CHOICES) == {"point", "lnmag", "complex"}
     assert set(learners.LEARNERS) == {"mlp", "gp", "gp-each", "lgbm"}
+
+
+def test_vector_fitting_recovers_the_poles_of_a_rational_response():
+    f = np.linspace(100.0, 250.0, 40)
+    s = 1j * f / F_REF
+    rng = np.random.default_rng(0)
+    p = np.array([-0.05 + 1.3j, -0.1 + 2.0j, -0.3 + 3.0j])
+    r = rng.normal(size=(6, 3)) + 1j * rng.normal(size=(6, 3))
+    h = evaluate(s, p, r, np.full(6, 0.3))
+    got_p, got_r, got_d = vector_fit(f, h, 3)
+    assert np.allclose(got_p, p, atol=1e-9) and np.allclose(got_d, 0.3, atol=1e-9)
+    assert np.abs(evaluate(s, got_p, got_r, got_d) - h).max() < 1e-9 * np.abs(h).max()
+
+
+def test_pole_residue_choice_decodes_its_own_targets():
+    sw = _sweeps(6)  # one resonance per design: two poles fit it exactly
+    choice = PoleResidue(2)
+    _, y = choice.training(sw, np.random.default_rng(0))
+    assert y.shape == (6, 1 + 2 * 2 + 2 * 6 * 2 + 2 * 6)
+    got, truth = choice.decode(y, sw), Answers.of(sw)
+    assert np.allclose(got.center, truth.center, rtol=1e-6)
+    assert np.allclose(got.edge, truth.edge, rtol=1e-6) and got.profile is None
