@@ -9,11 +9,11 @@ encoded identically), splits one dataset into training and test designs, and cap
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+import pyarrow as pa
 
-from surrogate.data.columns import sweep_arrays
+from surrogate.data.columns import COMPONENTS
 from surrogate.data.store import Store
 from surrogate.features import SpaceEncoder, codes_from_frame, input_specs
 from surrogate.runtime.encoding import InputSpec
@@ -52,6 +52,21 @@ class Sweeps:
                       source or self.source)
 
 
+def _lists(table: pa.Table, column: str) -> np.ndarray:
+    """A list column of equal-length lists as an array (rows, length)."""
+    arr = table.column(column).combine_chunks()
+    values = np.asarray(arr.flatten().to_numpy(zero_copy_only=False), dtype=float)
+    return values.reshape(len(arr), -1)
+
+
+def _complex(table: pa.Table, where: str) -> np.ndarray:
+    """The complex sweep of every row at ``where`` as (rows, n_values, 3) [um], components
+    (r, z, t) last (:func:`surrogate.data.columns.sweep_arrays`, for all rows at once)."""
+    return np.stack([_lists(table, f"sweep_{where}_u{c}_re_um")
+                     + 1j * _lists(table, f"sweep_{where}_u{c}_im_um")
+                     for c in COMPONENTS], axis=-1)
+
+
 def _specs(store: Store) -> list[InputSpec]:
     return input_specs(store.manifest["space"]["parameter"])
 
@@ -68,25 +83,23 @@ def load(path: str, *, profile: bool = True, limit: int | None = None,
         raise ValueError(f"{path}: inputs {[s.name for s in own]} differ from the training "
                          f"dataset's {[s.name for s in specs]}")
     specs = specs or own
-    df = store.read()
-    if "sweep_frequency_hz" not in df.columns:
+    table = store.read_table()
+    if "sweep_frequency_hz" not in table.column_names:
         raise ValueError(f"{path}: not a sweep dataset (no sweep_frequency_hz column)")
-    df = df[df["status"] == "ok"]
-    if "sample_index" in df.columns:
-        df = df.sort_values("sample_index", kind="stable")
-    df = df.reset_index(drop=True)
-    if limit is not None:
-        df = df.iloc[:limit]
-    if len(df) < 2:
-        raise ValueError(f"{path}: {len(df)} usable designs (need at least 2)")
-    codes = codes_from_frame(df, specs)
+    meta = table.select(["status", "sample_index"]).to_pandas()
+    ok = np.flatnonzero((meta["status"] == "ok").to_numpy())
+    rows = ok[np.argsort(meta["sample_index"].to_numpy()[ok], kind="stable")][:limit]
+    if len(rows) < 2:
+        raise ValueError(f"{path}: {len(rows)} usable designs (need at least 2)")
+    table = table.take(pa.array(rows))
+    lists = [n for n in table.column_names if n.startswith("sweep_") or n.startswith("profile_")]
+    codes = codes_from_frame(table.drop_columns(lists).to_pandas(), specs)
     x = SpaceEncoder([s.to_dict() for s in specs]).fit_transform(codes)
-    rows: list[dict[str, Any]] = df.to_dict("records")
-    band = np.asarray(rows[0]["sweep_frequency_hz"], dtype=float)
-    center = np.stack([sweep_arrays(r, "center") for r in rows])
-    edge = np.stack([sweep_arrays(r, "edge") for r in rows])
-    prof = np.stack([sweep_arrays(r, "profile") for r in rows]) if profile else None
-    dist = np.asarray(rows[0]["profile_distance_mm"], dtype=float)
+    band = _lists(table, "sweep_frequency_hz")[0]
+    dist = _lists(table, "profile_distance_mm")[0]
+    center, edge = _complex(table, "center"), _complex(table, "edge")
+    prof = _complex(table, "profile").reshape(len(rows), band.size, dist.size, 3) \
+        if profile else None
     return Sweeps(x, band, center, edge, prof, dist, str(path)), specs
 
 
