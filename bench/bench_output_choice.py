@@ -24,6 +24,8 @@ import sys
 import time
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
+
 from studies.output_choice import data, learners, poles, representations, study
 
 
@@ -67,6 +69,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="gp-each: optimiser restarts of the leading targets")
     ap.add_argument("--lead", type=int, default=4, help="gp-each: targets given restarts")
     ap.add_argument("--trees", type=int, default=3000, help="lgbm: trees per target")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="BLAS threads (default 1: on a shared machine more threads thrash; "
+                    "vector fitting ran 60x slower in CPU time with the default pool)")
     ap.add_argument("--json", type=Path, help="write the records here")
     args = ap.parse_args(argv)
     try:
@@ -95,7 +100,8 @@ def main(argv: list[str] | None = None) -> int:
     print(sizes)
     print(study.HEADER)
     t0 = time.perf_counter()
-    records = study.run(train, test, made, choices, args.seed)
+    with threadpool_limits(args.threads):
+        records = study.run(train, test, made, choices, args.seed)
     print()
     print(study.table(records))
     if args.json:

@@ -52,6 +52,10 @@ def vector_fit(f_hz: np.ndarray, h: np.ndarray, n_poles: int, iterations: int = 
     beta = np.linspace(f_hz[0], f_hz[-1], n_poles + 2)[1:-1] / F_REF
     poles = -beta / 50 + 1j * beta
     m = h.shape[1]
+    # each response weighted by its own RMS level (pointwise 1 / |h| would let a component
+    # that is zero to rounding, e.g. a tangential one, dominate the fit)
+    rms = np.sqrt(np.mean(np.abs(h) ** 2, axis=0))
+    wj = 1.0 / np.maximum(rms, 1e-9 * max(rms.max(), 1e-300))
     for _ in range(iterations):
         phi = _basis(s, poles)
         n_f, k = phi.shape
@@ -61,7 +65,7 @@ def vector_fit(f_hz: np.ndarray, h: np.ndarray, n_poles: int, iterations: int = 
             rows[j * n_f:(j + 1) * n_f, j * (k + 1):j * (k + 1) + k] = phi
             rows[j * n_f:(j + 1) * n_f, j * (k + 1) + k] = 1.0
             rows[j * n_f:(j + 1) * n_f, m * (k + 1):] = -h[:, j:j + 1] * phi
-        weight = 1.0 / np.maximum(np.abs(h).reshape(-1, order="F"), 1e-300)
+        weight = np.repeat(wj, n_f)
         sol = np.linalg.lstsq(rows * weight[:, None], h.reshape(-1, order="F") * weight,
                               rcond=None)[0]
         c = sol[m * (k + 1):]
