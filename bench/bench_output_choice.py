@@ -1,197 +1,116 @@
-"""Which outputs should a surrogate learn from sweep data? Measured on the same designs.
+"""Which outputs should a surrogate learn from sweep data, and how do the peers do? One table.
 
-Issue 20, item 1: the magnitude at one frequency changes sharply with the design near an
-antiresonance, while the complex response and the resonances move smoothly. This study
-trains the same learner on three choices of output, on the same training designs of a sweep
-dataset, and scores every choice on the same held-out designs at every band frequency:
+Issue 20, items 1 and 5 (:mod:`studies.output_choice`): every learner (scikit-learn MLP,
+shared-kernel GP, per-output GPs, LightGBM) on every output choice (``point``: today's
+magnitude at one frequency per row; ``lnmag``: POD of ln |u(f)| over the band; ``complex``: POD
+of the complex band response with its scale; ``poles``: a pole-residue form fitted per design
+by vector fitting), trained on the same designs of a sweep dataset
+and scored on the same test designs at every band frequency: a held-out split (``--test``) or
+another dataset (``--test-data``, e.g. fresh FE solves at another Sobol seed).
 
-* ``magnitude@f`` (today's outputs): one row per (design, frequency), inputs = design +
-  frequency, outputs = ln |centre|, ln |edge| (``--freqs-per-design`` frequencies per design,
-  drawn at random; 1 is today's dataset layout);
-* ``ln-magnitude band``: one row per design, outputs = POD coefficients of ln |centre(f)| and
-  ln |edge(f)| over the band, evaluated at the requested frequency by the band's grid;
-* ``complex band``: one row per design, outputs = ln of the band's RMS centre amplitude and
-  POD coefficients of the complex components of centre and edge (real and imaginary parts)
-  divided by that scale; the magnitude is computed from the predicted components.
+    python bench/bench_output_choice.py --data TRAIN [--test-data TEST] [--max-train N]
+        [--gp-rows N] [--learners mlp,gp,gp-each,lgbm] [--choices point,lnmag,complex,poles]
+        [--json out.json]
 
-Learners: scikit-learn's MLPRegressor (3 x 128, early stopping) and a Gaussian process
-(Matern 5/2, ARD) on standardised targets, identical for every choice. Errors are relative
-magnitude errors at every band frequency of the test designs: median, p95, p99, max; and the
-largest error on the field's scale, |error| / max(centre, edge).
-
-    python bench/bench_output_choice.py --data /path/to/sweep-dataset [--test 0.25] [--seed 0]
+Prints one markdown table (errors in %) and, with ``--json``, writes the records and the data
+sizes. GPs are capped at ``--gp-rows`` training rows (the table says so).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import time
-import warnings
-from collections.abc import Callable
+from pathlib import Path
 
-import numpy as np
-from sklearn.decomposition import PCA
-from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
-from sklearn.neural_network import MLPRegressor
-from sklearn.preprocessing import StandardScaler
+from threadpoolctl import threadpool_limits
 
-from surrogate.data.columns import sweep_arrays
-from surrogate.data.store import Store
-from surrogate.features import SpaceEncoder, codes_from_frame, input_specs
-
-Learner = Callable[[np.ndarray, np.ndarray], Callable[[np.ndarray], np.ndarray]]
+from studies.output_choice import data, learners, poles, representations, study
 
 
-def load(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Design features (n, d), band [Hz] (n_f,), complex centre and edge (n, n_f, 3) [um]."""
-    store = Store.open(path)
-    df = store.read()
-    df = df[df["status"] == "ok"].reset_index(drop=True)
-    specs = input_specs(store.manifest["space"]["parameter"])
-    codes = codes_from_frame(df, specs)
-    features = SpaceEncoder([s.to_dict() for s in specs]).fit_transform(codes)
-    rows = df.to_dict("records")
-    center = np.stack([sweep_arrays(r, "center") for r in rows])
-    edge = np.stack([sweep_arrays(r, "edge") for r in rows])
-    band = np.asarray(rows[0]["sweep_frequency_hz"], dtype=float)
-    return features, band, center, edge
-
-
-def mlp(seed: int) -> Learner:
-    def fit(x: np.ndarray, y: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-        sx, sy = StandardScaler().fit(x), StandardScaler().fit(y)
-        net = MLPRegressor(hidden_layer_sizes=(128, 128, 128), early_stopping=True, max_iter=3000,
-                           n_iter_no_change=50, random_state=seed, learning_rate_init=1e-3)
-        net.fit(sx.transform(x), sy.transform(y))
-        return lambda q: sy.inverse_transform(net.predict(sx.transform(q)).reshape(len(q), -1))
-    return fit
-
-
-def gp(seed: int) -> Learner:
-    def fit(x: np.ndarray, y: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-        sx, sy = StandardScaler().fit(x), StandardScaler().fit(y)
-        kernel = ConstantKernel() * Matern(np.ones(x.shape[1]), nu=2.5) + WhiteKernel(1e-4)
-        model = GaussianProcessRegressor(kernel, normalize_y=False, random_state=seed,
-                                         n_restarts_optimizer=0)
-        model.fit(sx.transform(x), sy.transform(y))
-        return lambda q: sy.inverse_transform(model.predict(sx.transform(q)).reshape(len(q), -1))
-    return fit
-
-
-def magnitude(u: np.ndarray) -> np.ndarray:
-    """|u| over the last axis of complex components (r, z, t)."""
-    return np.sqrt(np.sum(np.abs(u) ** 2, axis=-1))
-
-
-def choice_point(learner: Learner, xf: np.ndarray, band: np.ndarray, c: np.ndarray,
-                 e: np.ndarray, test_x: np.ndarray, per_design: int, rng: np.random.Generator
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Today's layout: (design, frequency) rows, ln magnitudes out."""
-    f01 = (band - band[0]) / (band[-1] - band[0])
-    idx = np.stack([rng.choice(band.size, per_design, replace=False) for _ in range(len(xf))])
-    rows = np.repeat(np.arange(len(xf)), per_design)
-    cols = idx.reshape(-1)
-    x = np.column_stack([xf[rows], f01[cols]])
-    y = np.column_stack([np.log(magnitude(c[rows, cols])), np.log(magnitude(e[rows, cols]))])
-    model = learner(x, y)
-    n_t = len(test_x)
-    q = np.column_stack([np.repeat(test_x, band.size, axis=0), np.tile(f01, n_t)])
-    out = np.exp(model(q)).reshape(n_t, band.size, 2)
-    return out[..., 0], out[..., 1]
-
-
-def choice_lnmag_band(learner: Learner, xf: np.ndarray, c: np.ndarray, e: np.ndarray,
-                      test_x: np.ndarray, modes: int) -> tuple[np.ndarray, np.ndarray]:
-    """Whole ln |u(f)| curves out, through POD."""
-    y = np.column_stack([np.log(magnitude(c)), np.log(magnitude(e))])
-    pca = PCA(min(modes, y.shape[1], len(y) - 1)).fit(y)
-    model = learner(xf, pca.transform(y))
-    out = np.exp(pca.inverse_transform(model(test_x)))
-    n_f = c.shape[1]
-    return out[:, :n_f], out[:, n_f:]
-
-
-def _complex_targets(c: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    scale = np.sqrt(np.mean(magnitude(c) ** 2, axis=1))
-    z = np.concatenate([c, e], axis=1) / scale[:, None, None]
-    return np.log(scale), np.concatenate([z.real.reshape(len(z), -1),
-                                          z.imag.reshape(len(z), -1)], axis=1)
-
-
-def choice_complex_band(learner: Learner, xf: np.ndarray, c: np.ndarray, e: np.ndarray,
-                        test_x: np.ndarray, modes: int) -> tuple[np.ndarray, np.ndarray]:
-    """Complex components over the band out, normalised by the band's RMS centre level."""
-    ln_scale, shape = _complex_targets(c, e)
-    pca = PCA(min(modes, shape.shape[1], len(shape) - 1)).fit(shape)
-    model = learner(xf, np.column_stack([ln_scale, pca.transform(shape)]))
-    pred = model(test_x)
-    flat = pca.inverse_transform(pred[:, 1:])
-    half = flat.shape[1] // 2
-    z = (flat[:, :half] + 1j * flat[:, half:]).reshape(len(test_x), -1, 3)
-    z *= np.exp(pred[:, :1])[:, :, None]
-    n_f = c.shape[1]
-    return magnitude(z[:, :n_f]), magnitude(z[:, n_f:])
-
-
-def score(pred_c: np.ndarray, pred_e: np.ndarray, c: np.ndarray, e: np.ndarray
-          ) -> dict[str, float]:
-    true_c, true_e = magnitude(c), magnitude(e)
-    field = np.maximum(true_c, true_e)
-    out = {}
-    for name, p, t in (("centre", pred_c, true_c), ("edge", pred_e, true_e)):
-        rel = np.abs(p / t - 1.0).ravel()
-        out[f"{name}_median"] = float(np.median(rel))
-        out[f"{name}_p95"] = float(np.percentile(rel, 95))
-        out[f"{name}_p99"] = float(np.percentile(rel, 99))
-        out[f"{name}_max"] = float(rel.max())
-        out[f"{name}_max_field"] = float(np.max(np.abs(p - t) / field))
+def _choices(args: argparse.Namespace) -> list[representations.Choice]:
+    made = {"point": lambda: representations.Point(args.freqs_per_design, args.point_modes),
+            "lnmag": lambda: representations.LnMagBand(args.modes, args.profile_modes),
+            "complex": lambda: representations.ComplexBand(args.modes, args.profile_modes),
+            "poles": lambda: poles.PoleResidue(args.poles)}
+    out = []
+    for name in args.choices.split(","):
+        if name not in made:
+            raise ValueError(f"--choices {name!r}: allowed {', '.join(made)}")
+        out.append(made[name]())
     return out
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--data", required=True, help="sweep dataset directory")
-    ap.add_argument("--test", type=float, default=0.25, help="held-out design fraction")
+    ap.add_argument("--data", required=True, help="training sweep dataset directory")
+    ap.add_argument("--test-data", help="test sweep dataset (default: hold out --test)")
+    ap.add_argument("--test", type=float, default=0.25,
+                    help="held-out design fraction without --test-data")
+    ap.add_argument("--max-train", type=int, help="use the first N training designs")
+    ap.add_argument("--max-test", type=int, help="score the first N test designs")
+    ap.add_argument("--gp-rows", type=int, help="GP learners train on the first N rows")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--modes", type=int, default=24, help="POD modes of the band choices")
+    ap.add_argument("--profile-modes", type=int, default=12,
+                    help="POD modes of the band choices' profile block")
+    ap.add_argument("--point-modes", type=int, default=8,
+                    help="POD modes of magnitude@f's profile at one frequency")
+    ap.add_argument("--poles", type=int, default=4,
+                    help="poles per design of the pole-residue choice (poles)")
+    ap.add_argument("--no-profile", action="store_true", help="centre and edge only")
     ap.add_argument("--freqs-per-design", type=int, default=1,
                     help="training frequencies per design of the magnitude@f choice")
-    ap.add_argument("--learners", default="mlp,gp")
+    ap.add_argument("--learners", default="mlp,gp,gp-each,lgbm",
+                    help="comma-separated, or none (only each choice's projection floor)")
+    ap.add_argument("--choices", default="point,lnmag,complex")
+    ap.add_argument("--restarts", type=int, default=1,
+                    help="gp-each: optimiser restarts of the leading targets")
+    ap.add_argument("--lead", type=int, default=4, help="gp-each: targets given restarts")
+    ap.add_argument("--trees", type=int, default=3000, help="lgbm: trees per target")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="BLAS threads (default 1: on a shared machine more threads thrash; "
+                    "vector fitting ran 60x slower in CPU time with the default pool)")
+    ap.add_argument("--json", type=Path, help="write the records here")
     args = ap.parse_args(argv)
-    warnings.filterwarnings("ignore", module="sklearn")
-    xf, band, c, e = load(args.data)
-    rng = np.random.default_rng(args.seed)
-    order = rng.permutation(len(xf))
-    n_test = max(1, round(args.test * len(xf)))
-    te, tr = order[:n_test], order[n_test:]
-    print(f"{len(xf)} designs ({len(tr)} train, {len(te)} test), {band.size} frequencies "
-          f"{band[0]:g}-{band[-1]:g} Hz; errors over every test design x frequency")
-    learners = {"mlp": mlp(args.seed), "gp": gp(args.seed)}
-    header = (f"{'learner':5} {'outputs':22} {'centre med/p95/p99/max %':>28} "
-              f"{'edge med/p95/p99/max %':>28} {'max |err|/field %':>18} {'fit s':>6}")
-    print(header)
-    for lname in args.learners.split(","):
-        learner = learners[lname]
-        runs = {
-            f"magnitude@f x{args.freqs_per_design}": lambda learner=learner: choice_point(
-                learner, xf[tr], band, c[tr], e[tr], xf[te], args.freqs_per_design,
-                np.random.default_rng(args.seed)),
-            "ln-magnitude band": lambda learner=learner: choice_lnmag_band(
-                learner, xf[tr], c[tr], e[tr], xf[te], args.modes),
-            "complex band": lambda learner=learner: choice_complex_band(
-                learner, xf[tr], c[tr], e[tr], xf[te], args.modes),
-        }
-        for name, run in runs.items():
-            t0 = time.perf_counter()
-            pc, pe = run()
-            s = score(pc, pe, c[te], e[te])
-            fmt = "{:.2f}/{:.1f}/{:.1f}/{:.0f}"
-            cs = fmt.format(*(100 * s[f"centre_{k}"] for k in ("median", "p95", "p99", "max")))
-            es = fmt.format(*(100 * s[f"edge_{k}"] for k in ("median", "p95", "p99", "max")))
-            mf = 100 * max(s["centre_max_field"], s["edge_max_field"])
-            print(f"{lname:5} {name:22} {cs:>28} {es:>28} {mf:>18.1f} "
-                  f"{time.perf_counter() - t0:>6.1f}")
+    try:
+        choices = _choices(args)
+        made = [learners.make(n, args.seed, gp_rows=args.gp_rows, restarts=args.restarts,
+                              lead=args.lead, trees=args.trees)
+                for n in args.learners.split(",") if args.learners != "none"]
+        full, specs = data.load(args.data, profile=not args.no_profile)
+        if args.test_data:
+            train = full
+            test, _ = data.load(args.test_data, profile=not args.no_profile, specs=specs)
+        else:
+            train, test = data.split(full, args.test, args.seed)
+        if args.max_train:
+            train = train.take(slice(0, args.max_train))
+        if args.max_test:
+            test = test.take(slice(0, args.max_test))
+        if test.band.shape != train.band.shape or (test.band != train.band).any():
+            raise ValueError("the test designs' band differs from the training designs'")
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    sizes = (f"train {len(train)} designs of {train.source}; test {len(test)} designs of "
+             f"{test.source}; {train.band.size} frequencies {train.band[0]:g}-"
+             f"{train.band[-1]:g} Hz")
+    print(sizes)
+    print(study.HEADER)
+    t0 = time.perf_counter()
+    with threadpool_limits(args.threads):
+        records = study.run(train, test, made, choices, args.seed)
+    print()
+    print(study.table(records))
+    if args.json:
+        args.json.write_text(json.dumps(
+            {"command": " ".join(["python bench/bench_output_choice.py", *(argv or sys.argv[1:])]),
+             "train": {"source": train.source, "designs": len(train)},
+             "test": {"source": test.source, "designs": len(test)},
+             "band_hz": [float(train.band[0]), float(train.band[-1]), int(train.band.size)],
+             "wall_s": time.perf_counter() - t0, "records": records}, indent=1))
     return 0
 
 

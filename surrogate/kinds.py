@@ -2,8 +2,9 @@
 
 This is the one place that lists the kinds. ``hapticrom train``, :func:`surrogate.train.train`,
 the model listing and the accuracy study look a kind up here; a kind's estimator, exporter and
-parity tolerance live in its own module (``surrogate/gp.py``, ``nn.py``, ``mlp.py``). Adding a
-kind is one new module defining ``KIND`` plus its line in :data:`KINDS` (docs/architecture.md).
+parity tolerance live in its own module (``surrogate/gp.py``, ``nn.py``, ``mlp.py``,
+``lgbm.py``). Adding a kind is one new module defining ``KIND`` plus its line in
+:data:`KINDS` (docs/architecture.md).
 
 Importing this module loads scikit-learn, torch and pysindy (about 5 s): the CLI imports it
 only when a command needs a kind, never to build its parser.
@@ -16,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from fieldspec import FieldError
-from surrogate import gp, mlp, nn, rom
+from surrogate import gp, lgbm, mlp, nn, rom
 from surrogate.kind import SurrogateKind
 
 __all__ = ["KINDS", "STEADY_KINDS", "get"]
@@ -48,7 +49,8 @@ ROM = SurrogateKind(name="rom", summary="transient envelope model (sparse identi
                     trainer=_train_rom, report=_rom_report)
 
 #: Every kind, by name, in the order ``--help`` lists them.
-KINDS: dict[str, SurrogateKind] = {k.name: k for k in (gp.KIND, nn.KIND, mlp.KIND, ROM)}
+KINDS: dict[str, SurrogateKind] = {k.name: k for k in (gp.KIND, nn.KIND, mlp.KIND, lgbm.KIND,
+                                                       ROM)}
 #: The kinds of the steady-state pipeline (one ONNX graph contract, :mod:`surrogate.export`).
 STEADY_KINDS = tuple(name for name, k in KINDS.items() if k.estimator is not None)
 

@@ -58,8 +58,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--data", nargs="+", required=True, metavar="DATASET",
                    help="one or more dataset directories (same space inputs)")
     p.add_argument("--kind", required=True, metavar="KIND",
-                   help="model kind, a name of the registry surrogate.kinds: gp, nn, mlp "
-                   "(harmonic amplitudes), rom (transient envelope); docs/architecture.md")
+                   help="model kind, a name of the registry surrogate.kinds: gp, nn, mlp, "
+                   "lgbm (harmonic amplitudes), rom (transient envelope); docs/architecture.md")
     p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing model directory (only one hapticrom wrote; never "

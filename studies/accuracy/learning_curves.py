@@ -1,6 +1,6 @@
 """What a learned model costs to get: held-out error against the number of FE samples and
-against total compute (generation + training), for every kind the study trains (GP, NN and
-the scikit-learn MLP baseline by default; :func:`curves`).
+against total compute (generation + training), for every kind the study trains (GP, NN, and
+the peers: the scikit-learn MLP baseline and LightGBM; :func:`curves`).
 
 Each size n trains on the first n training rows of the shipped dataset in its Sobol design
 order (what a dataset of n samples would hold) and is measured on all held-out rows (the split
@@ -39,6 +39,7 @@ NN_SIZES_QUICK = (64, 128)
 #: NN options of ``--quick`` (a smoke test of the pipeline, not a converged model).
 NN_QUICK_OPTIONS = {"max_epochs": 30, "n_members": 2}
 MLP_QUICK_OPTIONS = {"max_iter": 200}
+LGBM_QUICK_OPTIONS = {"n_estimators": 200, "learning_rate": 0.05}
 #: The kind also timed through the full run-time predictor.
 RUNTIME_KIND = "nn"
 
@@ -47,8 +48,10 @@ def curves(quick: bool) -> dict[str, tuple[tuple[int, ...], dict[str, Any]]]:
     """Kind -> (training sizes, options) of a full or a ``quick`` run."""
     if quick:
         return {"gp": (GP_SIZES_QUICK, {}), "nn": (NN_SIZES_QUICK, dict(NN_QUICK_OPTIONS)),
-                "mlp": (NN_SIZES_QUICK, dict(MLP_QUICK_OPTIONS))}
-    return {"gp": (GP_SIZES, {}), "nn": (NN_SIZES, {}), "mlp": (NN_SIZES, {})}
+                "mlp": (NN_SIZES_QUICK, dict(MLP_QUICK_OPTIONS)),
+                "lgbm": (NN_SIZES_QUICK, dict(LGBM_QUICK_OPTIONS))}
+    return {"gp": (GP_SIZES, {}), "nn": (NN_SIZES, {}), "mlp": (NN_SIZES, {}),
+            "lgbm": (NN_SIZES, {})}
 
 
 @dataclass

@@ -16,8 +16,8 @@ from surrogate.runtime.predictor import Predictor, make_session
 
 
 def test_registry_lists_every_kind_once_with_what_training_needs():
-    assert list(kinds.KINDS) == ["gp", "nn", "mlp", "rom"]
-    assert kinds.STEADY_KINDS == ("gp", "nn", "mlp")
+    assert list(kinds.KINDS) == ["gp", "nn", "mlp", "lgbm", "rom"]
+    assert kinds.STEADY_KINDS == ("gp", "nn", "mlp", "lgbm")
     for name in kinds.STEADY_KINDS:
         k = kinds.KINDS[name]
         assert k.name == name and k.export is not None and k.trainer is None
@@ -26,10 +26,10 @@ def test_registry_lists_every_kind_once_with_what_training_needs():
 
 
 def test_unknown_kind_names_the_field_and_the_choices():
-    with pytest.raises(FieldError, match=r"--kind 'svm': allowed gp, nn, mlp, rom") as err:
+    with pytest.raises(FieldError, match=r"--kind 'svm': allowed gp, nn, mlp, lgbm, rom") as err:
         kinds.get("svm")
     assert err.value.field == "--kind"
-    with pytest.raises(FieldError, match=r"allowed gp, nn, mlp$"):
+    with pytest.raises(FieldError, match=r"allowed gp, nn, mlp, lgbm$"):
         kinds.get("rom", steady=True)
 
 
@@ -102,5 +102,5 @@ def test_accuracy_study_fits_the_mlp_baseline_through_the_registry(synthetic_dat
     rows, last = curve("mlp", sd, (32, 64), {"hidden": [16], "max_iter": 300})
     assert [r["n"] for r in rows] == [32, 64] and last.kind == "mlp"
     assert all(np.isfinite(r["worst_median"]) and r["generation_s"] == r["n"] for r in rows)
-    with pytest.raises(FieldError, match="kind 'rom': allowed gp, nn, mlp"):
+    with pytest.raises(FieldError, match="kind 'rom': allowed gp, nn, mlp, lgbm"):
         curve("rom", sd, (32,))
