@@ -67,9 +67,10 @@ def score(pred: dict[str, np.ndarray], centre: np.ndarray, profile: np.ndarray,
     pg = pred.get("grid_mm", grid_mm)
     near = [j for j, d in enumerate(grid_mm) if d <= 20.0 + 1e-9 and np.isclose(pg, d).any()]
     cols = [int(np.argmin(np.abs(pg - grid_mm[j]))) for j in near]
+    same_grid = pg.shape == grid_mm.shape and np.allclose(pg, grid_mm)
     for label, truth, got in (("profile_0_20mm", profile[:, near], pred["profile_um"][:, cols]),
                               *((("profile_all", profile, pred["profile_um"]),)
-                                if pred["profile_um"].shape[1] == profile.shape[1] else ())):
+                                if same_grid else ())):
         l2 = np.linalg.norm(got - truth, axis=1) / np.linalg.norm(truth, axis=1)
         out[label] = [float(np.median(l2)), float(np.percentile(l2, 95))]
     return out
@@ -124,6 +125,7 @@ def main(argv: list[str] | None = None) -> int:
                       max_epochs=ours["refit_epochs"], patience=ours["refit_patience"],
                       learning_rate=ours["refit_learning_rate"])
             stages.append(("+ through the decode", time.perf_counter() - t0))
+            print(f"refit best epochs {est.refit_best_epoch_}", flush=True)
         onnx = export_sweep_nn(est, targets, False, data.band_hz[0], data.band_hz[-1],
                                data.band_hz, {})
         for set_name, (d, designs) in sets.items():
