@@ -144,3 +144,14 @@ def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
     with pytest.raises(ValueError, match="loss = 'l1': allowed 'magnitude', 'coefficients'"):
         train([sweep_data], "nn", tmp_path / "n", options={"loss": "l1"})
     assert not (tmp_path / "g").exists() and not (tmp_path / "n").exists()
+
+
+def test_intervals_of_a_sweep_model_calibrate_on_its_held_out_designs(sweep_model):
+    from surrogate.interval_calibration import calibrate_model_dir
+
+    entry = calibrate_model_dir(sweep_model[0], write=False)
+    rows = entry["rows"]
+    assert rows["calibration"] + rows["check"] == sweep_model[1]["training"]["held_out"]
+    assert rows["pairs_per_design"] == BAND_HZ.size
+    assert set(entry["groups"]) == {"center", "edge", "profile", "profile_normal_um"}
+    assert 0.0 <= entry["coverage95_check"]["after"]["center_amplitude_um"] <= 1.0
