@@ -12,7 +12,8 @@ the same (design, frequency) pairs. Profile L2 errors over the whole profile and
 (the single-frequency models' profile).
 
     python bench/bench_sweep_nn.py --data /work/sweepdata/default-sweep \
-        --test-data /work/sweepdata/default-sweep-test --options '{"hidden": [128, 128]}'
+        --test-data /work/sweepdata/default-sweep-test --options '{"hidden": [256, 256]}'
+    python bench/bench_sweep_nn.py --model models/NAME --test-data ... --data ...
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ def graph_predict(onnx: bytes, data: SweepData, codes: np.ndarray) -> dict[str, 
 
 
 def baseline_predict(path: str, data: SweepData, codes: np.ndarray) -> dict[str, np.ndarray]:
-    """A single-frequency model's outputs at the same pairs, its profile on its own grid."""
+    """A model directory's outputs at the pairs (through the run-time predictor), its profile
+    on its own grid."""
     p = load_predictor(path)
     inputs = {s.name: (codes[:, j] if s.type != "categorical"
                        else np.asarray(s.choices)[codes[:, j].astype(int)])
@@ -87,6 +89,22 @@ def line(name: str, s: dict[str, Any]) -> str:
             f"{100 * pn[1]:.1f} %)")
 
 
+def score_model(args: argparse.Namespace) -> int:
+    """Score a trained model and the baseline at every pair of the test set's designs."""
+    test = load_sweep_datasets([args.test_data])
+    codes, centre, profile, _ = pair_rows(test, np.arange(len(test.codes)))
+    print(f"test set {len(test.codes)} designs x {test.band_hz.size} frequencies")
+    results = {}
+    for name in (args.model, args.baseline):
+        s = score(baseline_predict(name, test, codes), centre, profile, test.grid_mm)
+        results[name] = s
+        print(line(name, s), flush=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"args": vars(args), "results": results}, f, indent=1)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True)
@@ -97,7 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--modes", type=int, default=None, help="profile POD modes (default 128)")
     ap.add_argument("--options", default="{}", help="sweep and estimator options (JSON)")
     ap.add_argument("--json", default=None, help="write the scores here")
+    ap.add_argument("--model", default=None, help="score this trained sweep model directory "
+                    "on --test-data (beside --baseline) instead of fitting")
     args = ap.parse_args(argv)
+    if args.model:
+        return score_model(args)
     options = json.loads(args.options)
     ours, _ = _split_options(dict(options))
     data = load_sweep_datasets([args.data])
