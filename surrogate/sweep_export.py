@@ -5,16 +5,15 @@ frequency -> ln magnitudes, exported as the one graph contract of :mod:`surrogat
       -> each member's targets y = [ln s, POD coefficients]       (members, batch, 1 + k)
       -> t = (f - f_0) / step from the frequency's feature, clamped to [0, n_f - 1];
          i = min(floor(t), n_f - 2), w = t - i
-      -> normalised components z = mean_t + y[1:] @ modes_t with modes_t, mean_t linearly
-         interpolated between the band's grid points i and i + 1   (members, batch, P, 6)
+      -> normalised components z = mean_t + y[1:] @ modes_t at the band's grid points i and
+         i + 1, linearly interpolated with the weight w            (members, batch, P, 6)
       -> ln |u| = ln s + 0.5 ln(sum of squares of the six parts)   (members, batch, P)
       -> log outputs [centre, edge, edge / centre, profile, (normal profile)]
       -> log_mean, log_std: their mean and (population) std over the members.
 
-Interpolating the basis rather than the rebuilt band is the same arithmetic (the rebuild is
-linear in the basis) at the cost of two grid points instead of n_f. The modes and the means
-carry the per-location weights of :class:`surrogate.sweep_targets.BandTargets`, so the graph
-needs nothing outside it. :func:`reference_log_outputs` is the graph-free numpy version
+Rebuilding two grid points per row rather than the whole band costs 2 / n_f of it. The modes
+and the means carry the per-location weights of :class:`surrogate.sweep_targets.BandTargets`,
+so the graph needs nothing outside it. :func:`reference_log_outputs` is the graph-free numpy version
 (training checks the exported graph against it).
 """
 
@@ -61,12 +60,15 @@ class BandDecoder(torch.nn.Module):
         i0 = t.floor().clamp(max=float(self.n_f - 2))
         w = (t - i0).unsqueeze(-1)
         i0 = i0.long()
-        m0, m1 = self.modes.index_select(0, i0), self.modes.index_select(0, i0 + 1)
-        c0, c1 = self.mean.index_select(0, i0), self.mean.index_select(0, i0 + 1)
-        modes = m0 + w.unsqueeze(-1) * (m1 - m0)                      # (b, k, L)
-        mean = c0 + w * (c1 - c0)                                      # (b, L)
-        z = mean + torch.matmul(y[..., 1:].unsqueeze(-2), modes).squeeze(-2)
-        return z.unflatten(-1, (self.P, 6))
+        c = y[..., 1:].transpose(0, 1)                                 # (b, M, k)
+        # one (M x k) @ (k x L) product per row and grid point, then the weights: the same
+        # arithmetic as interpolating the basis, without a (b, k, L) interpolated copy
+        z0 = torch.matmul(c, self.modes.index_select(0, i0)) \
+            + self.mean.index_select(0, i0).unsqueeze(1)               # (b, M, L)
+        z1 = torch.matmul(c, self.modes.index_select(0, i0 + 1)) \
+            + self.mean.index_select(0, i0 + 1).unsqueeze(1)
+        z = z0 + w.unsqueeze(-1) * (z1 - z0)
+        return z.transpose(0, 1).unflatten(-1, (self.P, 6))
 
     def at_grid(self, y: torch.Tensor, index: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, F, P, 6) at the band grid points ``index`` (F,)."""
