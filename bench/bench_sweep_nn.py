@@ -19,6 +19,7 @@ the same (design, frequency) pairs. Profile L2 errors over the whole profile and
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import time
 from typing import Any
@@ -66,6 +67,10 @@ def score(pred: dict[str, np.ndarray], centre: np.ndarray, profile: np.ndarray,
         rel = np.abs(p / y - 1.0)
         out[name] = [float(np.median(rel)), *np.percentile(rel, [95, 99]).tolist(),
                      float(rel.max()), float(np.max(np.abs(p - y) / field))]
+        key = f"{'center' if name == 'centre' else 'edge'}_amplitude_um_log_std"
+        if key in pred:  # coverage of the model's 95 % interval
+            z = np.abs(np.log(y) - np.log(p)) / np.maximum(pred[key], 1e-300)
+            out[f"{name}_coverage95"] = float(np.mean(z <= 1.959964))
     pg = pred.get("grid_mm", grid_mm)
     near = [j for j, d in enumerate(grid_mm) if d <= 20.0 + 1e-9 and np.isclose(pg, d).any()]
     cols = [int(np.argmin(np.abs(pg - grid_mm[j]))) for j in near]
@@ -86,7 +91,8 @@ def line(name: str, s: dict[str, Any]) -> str:
             f"{100 * c[3]:.0f} %  edge {100 * e[0]:.2f}/{100 * e[1]:.1f}/{100 * e[2]:.1f}/"
             f"{100 * e[3]:.0f} %  max/field {100 * max(c[4], e[4]):.1f} %  profile L2 "
             f"{100 * pa[0]:.2f}/{100 * pa[1]:.1f} % (0-20 mm {100 * pn[0]:.2f}/"
-            f"{100 * pn[1]:.1f} %)")
+            f"{100 * pn[1]:.1f} %)" + "".join(f"  coverage {k[:-11]} {100 * v:.1f} %"
+                                               for k, v in s.items() if k.endswith("coverage95")))
 
 
 def score_model(args: argparse.Namespace) -> int:
@@ -115,6 +121,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--modes", type=int, default=None, help="profile POD modes (default 128)")
     ap.add_argument("--options", default="{}", help="sweep and estimator options (JSON)")
     ap.add_argument("--json", default=None, help="write the scores here")
+    ap.add_argument("--centre-weights", default="1",
+                    help="comma-separated centre_weight values: one refit of the same stage-1 "
+                    "fit each")
     ap.add_argument("--model", default=None, help="score this trained sweep model directory "
                     "on --test-data (beside --baseline) instead of fitting")
     args = ap.parse_args(argv)
@@ -137,16 +146,20 @@ def main(argv: list[str] | None = None) -> int:
     est, targets = fit_sweep(data, tr, seed=args.seed, n_modes=args.modes,
                              options={**options, "loss": "coefficients"})
     stages = [("coefficients (MSE)", time.perf_counter() - t0)]
-    for stage in ("coefficients", "magnitude"):
-        if stage == "magnitude":
+    first = est
+    weights = [float(w) for w in args.centre_weights.split(",")]
+    for stage in ("coefficients", *(f"magnitude w{w:g}" for w in weights)):
+        if stage != "coefficients":
             from surrogate.sweep_export import BandDecoder, magnitude_error
 
             t0 = time.perf_counter()
             X = encode(data.codes[tr], data.specs)
-            est.refit(X, magnitude_error(BandDecoder(targets), data.response[tr]),
+            est = copy.deepcopy(first)
+            est.refit(X, magnitude_error(BandDecoder(targets), data.response[tr],
+                                         centre_weight=float(stage.split(" w")[1])),
                       max_epochs=ours["refit_epochs"], patience=ours["refit_patience"],
                       learning_rate=ours["refit_learning_rate"])
-            stages.append(("+ through the decode", time.perf_counter() - t0))
+            stages.append((f"+ through the decode ({stage})", time.perf_counter() - t0))
             print(f"refit best epochs {est.refit_best_epoch_}", flush=True)
         onnx = export_sweep_nn(est, targets, False, data.band_hz[0], data.band_hz[-1],
                                data.band_hz, {})

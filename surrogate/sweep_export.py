@@ -145,19 +145,20 @@ def export_sweep_nn(estimator: MLPEnsembleRegressor, targets: BandTargets, norma
 
 
 def magnitude_error(decoder: BandDecoder, response: np.ndarray, *, per_step: int = 8,
-                    val_every: int = 8) -> Any:
+                    val_every: int = 8, centre_weight: float = 1.0) -> Any:
     """The ``error`` of :meth:`surrogate.nn.MLPEnsembleRegressor.refit` that trains the members
     through the decode on what users meet: squared errors of ln |u| at band frequencies (a
     random ``per_step`` of them per step, every ``val_every``-th one for validation) of the
     centre, the edge and the profile (each a third of the weight; with the normal profile a
-    quarter each), against ``response`` (n, n_f, P, 6) [um] of the fitted rows."""
+    quarter each; ``centre_weight`` multiplies the centre's), against ``response``
+    (n, n_f, P, 6) [um] of the fitted rows."""
     truth_mag = log_magnitudes(response)                                   # (n, n_f, P)
     parts = [truth_mag[..., :2], truth_mag[..., 1:]]
     if decoder.normal:
         parts.append(log_normal(response)[..., 1:])
     truth = torch.as_tensor(np.concatenate(parts, axis=-1), dtype=torch.float32)
     m = decoder.P - 1
-    shares = [1.0, 1.0, *([1.0 / m] * m), *([1.0 / m] * (m if decoder.normal else 0))]
+    shares = [centre_weight, 1.0, *([1.0 / m] * m), *([1.0 / m] * (m if decoder.normal else 0))]
     w = torch.as_tensor(shares, dtype=torch.float32)
     w = w * (w.numel() / w.sum())
     keep = [0, 1, *range(3, 3 + m * (2 if decoder.normal else 1))]  # all but edge / centre
