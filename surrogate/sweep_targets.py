@@ -38,7 +38,9 @@ from surrogate.data.columns import COMPONENTS
 from surrogate.data.store import Store
 from surrogate.features import codes_from_frame, input_specs
 from surrogate.pod import POD
+from surrogate.registry import manifest_sha256
 from surrogate.runtime.encoding import InputSpec
+from surrogate.train import _edge_radius, _merge_specs
 
 __all__ = ["FREQUENCY_INPUT", "BandTargets", "SweepData", "check_not_mixed", "frequency_spec",
            "is_sweep", "load_sweep_datasets", "log_magnitudes", "log_normal",
@@ -114,10 +116,6 @@ def load_sweep_datasets(paths: Sequence[str | Path], *, categorical: str = "oneh
                         ) -> SweepData:
     """Read the ok rows of sweep datasets (the same space inputs, band and profile grid),
     each in its design-sequence order (``sample_index``), as :class:`SweepData`."""
-    # Lazy: surrogate.train imports this module, and this module its helpers.
-    from surrogate.registry import manifest_sha256
-    from surrogate.train import _edge_radius, _merge_specs
-
     if not paths:
         raise ValueError("--data: give at least one dataset")
     specs: list[InputSpec] | None = None

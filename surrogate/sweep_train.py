@@ -1,4 +1,5 @@
-"""Train an NN surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``).
+"""Train an NN surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``, which
+calls :func:`train_sweep` when every dataset is a sweep dataset).
 
 The model learns, per design, the complex-band representation of
 :class:`surrogate.sweep_targets.BandTargets` and ships it through the one graph contract of
@@ -34,6 +35,7 @@ import numpy as np
 from fieldspec import FieldError
 from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.intervals import calibrate, residuals
+from surrogate.kinds import get as get_kind
 from surrogate.params import check_choice, check_number
 from surrogate.pod import output_columns
 from surrogate.registry import check_model_out, package_versions, write_model
@@ -140,8 +142,6 @@ def fit_sweep(data: SweepData, designs: np.ndarray, *, seed: int = 0,
     """(fitted :class:`surrogate.nn.MLPEnsembleRegressor`, fitted :class:`BandTargets`) of
     the rows ``designs`` of ``data`` (``options``: the sweep options of the module docstring
     and the estimator's)."""
-    from surrogate.kinds import get as get_kind
-
     ours, est_options = _split_options(dict(options or {}))
     X = encode(data.codes[designs], data.specs)
     targets = BandTargets(centre_modes=ours["centre_modes"], profile_modes=n_modes or 128)
@@ -161,9 +161,8 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                 options: dict[str, Any] | None = None, outputs: Sequence[str] = ("profile_um",),
                 calibration_fraction: float | None = None) -> dict[str, Any]:
     """Train an NN sweep model on the sweep datasets ``paths`` and write ``out`` (arguments
-    as :func:`surrogate.train.train`; the split and the calibration rows are designs)."""
-    from surrogate.kinds import get as get_kind
-
+    as :func:`surrogate.train.train`; the split and the calibration rows are designs); return
+    its card. ``hapticrom train`` calls it when every dataset is a sweep dataset."""
     spec = get_kind(kind)
     if kind != "nn":
         raise FieldError("--kind", f"--kind {kind}: sweep datasets train the nn kind (its graph "

@@ -41,7 +41,6 @@ from surrogate.registry import (
 )
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
-from surrogate.sweep_targets import check_not_mixed
 
 __all__ = ["TrainingData", "check_outputs", "edge_radius_rule", "evaluate", "fit_kind",
            "load_datasets", "train"]
@@ -122,7 +121,8 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
         manifest = store.manifest
         if manifest.get("band"):
             raise ValueError(f"--data: {path} is a sweep dataset (one row per design over a "
-                             "band); these models train on single-frequency rows")
+                             "band); these models train on single-frequency rows (sweeps: "
+                             "surrogate.sweep_train, which hapticrom train calls for them)")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
         specs = these if specs is None else _merge_specs(specs, these, str(path))
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)
@@ -248,8 +248,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     scales the model's log-std on them so that its 95 % intervals cover 95 %
     (:mod:`surrogate.intervals`; the card's ``interval_calibration``); the held-out metrics are
     then those of the calibrated intervals. None (the default): 0.1 when that is at least
-    :data:`AUTO_CALIBRATION_ROWS` rows, else no calibration; 0: none. Sweep datasets
-    train the complex-band model of :mod:`surrogate.sweep_train` (rows are then designs)."""
+    :data:`AUTO_CALIBRATION_ROWS` rows, else no calibration; 0: none."""
     # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
     # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
     from surrogate.kinds import get as get_kind
@@ -263,13 +262,6 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                              "kinds)")
         return spec.trainer(paths, out, seed=seed, overwrite=overwrite,
                             options=dict(options or {}))
-    if check_not_mixed(paths):  # sweep datasets: the complex-band model
-        from surrogate.sweep_train import train_sweep
-
-        return train_sweep(paths, kind, out, test_fraction=test_fraction, seed=seed,
-                           n_modes=n_modes, overwrite=overwrite, categorical=categorical,
-                           options=options, outputs=outputs,
-                           calibration_fraction=calibration_fraction)
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     data = load_datasets(paths, categorical=categorical, outputs=extra)
     tr, te = split(len(data.codes), test_fraction, seed)

@@ -13,9 +13,14 @@ from fieldspec import FieldError
 from surrogate.runtime.encoding import PredictorInputError, encode
 from surrogate.runtime.predictor import Predictor, load_predictor, make_session
 from surrogate.sweep_export import export_sweep_nn, member_targets, reference_log_outputs
-from surrogate.sweep_targets import BandTargets, load_sweep_datasets, log_magnitudes
-from surrogate.sweep_train import fit_sweep
-from surrogate.train import split, train
+from surrogate.sweep_targets import (
+    BandTargets,
+    check_not_mixed,
+    load_sweep_datasets,
+    log_magnitudes,
+)
+from surrogate.sweep_train import fit_sweep, train_sweep
+from surrogate.train import split
 
 OPTIONS = {"hidden": (16, 16), "n_members": 3, "max_epochs": 60, "centre_modes": 6,
            "refit_epochs": 4, "refit_patience": 2}
@@ -30,7 +35,8 @@ def sweep_data(tmp_path_factory):
 @pytest.fixture(scope="module")
 def sweep_model(sweep_data, tmp_path_factory):
     out = tmp_path_factory.mktemp("models") / "nn-sweep"
-    card = train([sweep_data], "nn", out, n_modes=8, options=dict(OPTIONS), outputs=OUTPUTS)
+    card = train_sweep([sweep_data], "nn", out, n_modes=8, options=dict(OPTIONS),
+                       outputs=OUTPUTS)
     return out, card
 
 
@@ -129,8 +135,9 @@ def test_sweep_and_single_frequency_data_mixed_are_refused(sweep_data, tmp_path)
     single = make_dataset(tmp_path / "single", 8)
     out = tmp_path / "m"
     with pytest.raises(FieldError, match="mixes sweep and single-frequency") as err:
-        train([sweep_data, single], "nn", out)
-    assert err.value.field == "--data" and not out.exists()
+        check_not_mixed([sweep_data, single])
+    assert err.value.field == "--data"
+    assert check_not_mixed([sweep_data]) and not check_not_mixed([single])
     from hapticrom.cli import main
     assert main(["train", "--data", str(single), str(sweep_data), "--kind", "nn",
                  "--out", str(out)]) == 2
@@ -139,10 +146,10 @@ def test_sweep_and_single_frequency_data_mixed_are_refused(sweep_data, tmp_path)
 
 def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
     with pytest.raises(FieldError, match="sweep datasets train the nn kind") as err:
-        train([sweep_data], "gp", tmp_path / "g")
+        train_sweep([sweep_data], "gp", tmp_path / "g")
     assert err.value.field == "--kind"
     with pytest.raises(ValueError, match="loss = 'l1': allowed 'magnitude', 'coefficients'"):
-        train([sweep_data], "nn", tmp_path / "n", options={"loss": "l1"})
+        train_sweep([sweep_data], "nn", tmp_path / "n", options={"loss": "l1"})
     assert not (tmp_path / "g").exists() and not (tmp_path / "n").exists()
 
 
