@@ -15,8 +15,8 @@ as they use a single-frequency model.
   ``"coefficients"`` stops after the first stage. ``centre_modes`` (default 48) and ``--modes``
   (the profile's, default 128) size the two POD blocks; ``refit_epochs`` (default 400),
   ``refit_patience`` (default 40), ``refit_learning_rate`` (default 1e-3) and
-  ``centre_weight`` (default 3: the centre's squared ln error counts three times the edge's
-  and three times the whole profile's; docs/sweep-models.md has the measurement) drive the
+  ``centre_weight`` (default 6: the centre's squared ln error counts six times the edge's
+  and six times the whole profile's; docs/sweep-models.md has the measurement) drive the
   second stage; every other option is the estimator's (``hidden`` defaults to 256 x 256 here).
 * The card's metrics and interval calibration are computed on (design, band frequency) pairs
   *through the exported graph and the run-time encoder*, as for single-frequency models
@@ -67,7 +67,7 @@ LOSSES = ("magnitude", "coefficients")
 #: outputs (the single-frequency NN's tolerance; measured 2e-6 on default-sweep)
 PARITY_TOL = 1e-4
 _SWEEP_OPTIONS = {"loss": "magnitude", "centre_modes": 48, "refit_epochs": 400,
-                  "refit_patience": 40, "refit_learning_rate": 1e-3, "centre_weight": 3.0}
+                  "refit_patience": 40, "refit_learning_rate": 1e-3, "centre_weight": 6.0}
 #: The estimator's defaults for sweep data where they differ from the single-frequency NN's
 #: (bench/bench_sweep_nn.py on 1,248 designs, held-out centre / edge p95: 15 / 13 % with
 #: 256 x 256 and the default refit, 19 / 17 % with 128 x 128 and 150 refit epochs at 3e-4)
