@@ -27,7 +27,8 @@ from onnx import helper, numpy_helper
 from scipy.linalg import solve_triangular
 from sklearn.gaussian_process.kernels import RBF, Matern
 
-__all__ = ["MAX_IR_VERSION", "export_gp", "export_nn", "finish_model", "set_metadata"]
+__all__ = ["MAX_IR_VERSION", "export_gp", "export_module", "export_nn", "finish_model",
+           "set_metadata"]
 
 #: onnx >= 1.23 writes IR 14 by default; onnxruntime 1.31 reads at most 13.
 MAX_IR_VERSION = 10
@@ -55,11 +56,16 @@ def finish_model(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
 def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
               metadata: Mapping[str, Any]) -> bytes:
     """ONNX bytes of a fitted :class:`surrogate.nn.MLPEnsembleRegressor` (float32 input)."""
+    return export_module(estimator.to_module(B, b), estimator.n_features_in_, metadata)
+
+
+def export_module(module: Any, n_features: int, metadata: Mapping[str, Any]) -> bytes:
+    """ONNX bytes of a torch module ``x (batch, n_features) float32 -> (log_mean, log_std)``
+    (the NN ensembles: :func:`export_nn`, the sweep models of :mod:`surrogate.sweep_export`)."""
     # Lazy: torch costs 3.9 s to import; the GP's paths (surrogate.refine) need none of it.
     import torch
 
-    module = estimator.to_module(B, b)
-    example = torch.zeros(2, estimator.n_features_in_, dtype=torch.float32)
+    example = torch.zeros(2, n_features, dtype=torch.float32)
     program = torch.onnx.export(module, (example,), dynamo=True, input_names=["x"],
                                 output_names=["log_mean", "log_std"],
                                 dynamic_shapes={"x": {0: "batch"}}, optimize=True,

@@ -15,6 +15,7 @@ from surrogate.intervals import calibrate, coverage, residuals
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, load_predictor
+from surrogate.sweep_targets import load_sweep_datasets, pair_rows
 from surrogate.train import load_datasets, split
 
 __all__ = ["calibrate_model_dir"]
@@ -42,7 +43,9 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
         raise ValueError(f"--data: {len(paths)} datasets, the card names {len(sources)}")
     raw = load_predictor(root, calibrated=False)
     extra = list(raw.extra_outputs)
-    rows = load_datasets(paths, outputs=extra)
+    sweep = "representation" in card  # a sweep model: rows are designs, scored at every
+    rows = (load_sweep_datasets(paths) if sweep  # band frequency (surrogate.sweep_train)
+            else load_datasets(paths, outputs=extra))
     for p, s, now in zip(paths, sources, rows.sources, strict=True):
         if manifest_sha256(p) != s["manifest_sha256"] and (
                 now["space_hash"] != s.get("space_hash") or now["rows"] != s.get("rows")):
@@ -57,21 +60,30 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
     perm = np.random.default_rng(seed).permutation(te)
     n_check = round(check_fraction * perm.size)
     cal, check = np.sort(perm[n_check:]), np.sort(perm[:n_check])
-    r_cal = residuals(raw.predict(rows.codes[cal]), rows.center_um[cal], rows.profile_um[cal],
-                      {name: rows.extra_um[name][cal] for name in extra})
-    r_check = residuals(raw.predict(rows.codes[check]), rows.center_um[check],
-                        rows.profile_um[check],
-                        {name: rows.extra_um[name][check] for name in extra})
+    r_cal, r_check = (_residuals(raw, rows, which, extra, sweep) for which in (cal, check))
     entry = calibrate(r_cal, extra=extra)
     entry["rows"] = {"from": "the rows training held out (training.seed, "
                      "training.test_fraction)", "seed": seed, "calibration": int(cal.size),
                      "check": int(check.size), "data": rows.sources}
+    if sweep:
+        entry["rows"]["pairs_per_design"] = int(rows.band_hz.size)  # every band frequency
     entry["coverage95_check"] = {"before": coverage(r_check, extra=extra),
                                  "after": coverage(r_check, entry["log_std_scale"], extra)}
     entry["command"] = "hapticrom models calibrate-intervals"
     if write:
         _write_card(root, {**card, CALIBRATION_KEY: entry})
     return entry
+
+
+def _residuals(raw: Any, rows: Any, which: np.ndarray, extra: list[str], sweep: bool
+               ) -> np.ndarray:
+    """Normalised residuals of the rows ``which`` (of a sweep model: every band frequency of
+    the designs ``which``)."""
+    if sweep:
+        codes, centre, profile, ext = pair_rows(rows, which, "profile_normal_um" in extra)
+        return residuals(raw.predict(codes), centre, profile, ext)
+    return residuals(raw.predict(rows.codes[which]), rows.center_um[which],
+                     rows.profile_um[which], {name: rows.extra_um[name][which] for name in extra})
 
 
 def _write_card(root: Path, card: dict[str, Any]) -> None:

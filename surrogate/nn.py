@@ -13,6 +13,7 @@ outputs, ready for ONNX export.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -25,6 +26,9 @@ from surrogate.kind import SurrogateKind
 from surrogate.params import check_number, training_data
 
 __all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor"]
+
+#: ``error(out, rows, training) -> (members, rows, q)`` squared errors of a training step
+Error = Callable[[torch.Tensor, Any, bool], torch.Tensor]
 
 
 class EnsembleModule(torch.nn.Module):
@@ -114,6 +118,33 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
         self.n_outputs_ = Y.shape[1]
         return self
 
+    def refit(self, X: Any, error: Error, *, max_epochs: int, patience: int,
+              learning_rate: float) -> MLPEnsembleRegressor:
+        """Continue training the fitted members on ``error(y, rows, training)``: squared
+        errors (members, rows, q) of their outputs ``y`` in target units (members, rows,
+        targets) for the rows ``rows`` of ``X``; each member keeps the train/validation split
+        of :meth:`fit` (same ``random_state``) and its best weights on its validation rows."""
+        check_is_fitted(self)
+        X = validate_data(self, X, dtype=float, reset=False)
+        Xs = torch.as_tensor((X - self.x_mean_) / self.x_scale_, dtype=torch.float32)
+        y_mean = torch.as_tensor(self.y_mean_, dtype=torch.float32)
+        y_scale = torch.as_tensor(self.y_scale_, dtype=torch.float32)
+        train, val = _splits(len(X), self.n_members, self.val_fraction,
+                             np.random.default_rng(self.random_state))
+        torch.manual_seed(self.random_state + 1)
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            self.weights_, self.biases_, self.refit_best_epoch_ = _train(
+                Xs, torch.zeros(len(X), self.n_outputs_), train, val, tuple(self.hidden),
+                max_epochs, patience, learning_rate, self.weight_decay, self.batch_size,
+                error=lambda out, rows, training: error(out * y_scale + y_mean, rows,
+                                                        training),
+                init=(self.weights_, self.biases_))
+        finally:
+            torch.set_num_threads(threads)
+        return self
+
     def _check_params(self) -> None:
         hidden = tuple(self.hidden)
         if not hidden or not all(isinstance(h, int) and h >= 1 for h in hidden):
@@ -184,11 +215,18 @@ def _forward(X: torch.Tensor, weights: list[torch.Tensor],
 
 def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Tensor,
            hidden: tuple[int, ...], max_epochs: int, patience: int, lr: float,
-           weight_decay: float, batch_size: int
+           weight_decay: float, batch_size: int, error: Error | None = None,
+           init: tuple[list[torch.Tensor], list[torch.Tensor]] | None = None
            ) -> tuple[list[torch.Tensor], list[torch.Tensor], list[int]]:
     """Mini-batch AdamW on all members at once (each member sees only its own training rows
-    of a batch); per-member early stopping on the validation loss after each epoch."""
+    of a batch); per-member early stopping on the validation loss after each epoch.
+    ``error(out, rows, training)``: the squared errors (members, rows, q) of the members'
+    standardised outputs ``out`` for the rows ``rows`` (default: against ``Y``); ``init``:
+    start from these (weights, biases) instead of a random initialisation."""
     members, n = train.shape
+    if error is None:
+        def error(out: torch.Tensor, rows: torch.Tensor | slice, training: bool) -> torch.Tensor:
+            return (out - Y[rows].unsqueeze(0)) ** 2
     sizes = (X.shape[1], *hidden, Y.shape[1])
     weights, biases = [], []
     for fan_in, fan_out in itertools.pairwise(sizes):
@@ -196,6 +234,9 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
         weights.append(((torch.rand(members, fan_in, fan_out) * 2 - 1) * bound)
                        .requires_grad_())
         biases.append(torch.zeros(members, 1, fan_out, requires_grad=True))
+    if init is not None:
+        weights = [w.detach().clone().requires_grad_() for w in init[0]]
+        biases = [v.detach().clone().requires_grad_() for v in init[1]]
     params = weights + biases
     opt = torch.optim.AdamW(params, lr=lr, weight_decay=weight_decay)
     tmask = train.float().unsqueeze(-1)
@@ -206,14 +247,14 @@ def _train(X: torch.Tensor, Y: torch.Tensor, train: torch.Tensor, val: torch.Ten
     for epoch in range(max_epochs):
         for rows in torch.randperm(n).split(max(batch_size, 1)):
             m = tmask[:, rows]
-            sq = (_forward(X[rows], weights, biases) - Y[rows].unsqueeze(0)) ** 2
+            sq = error(_forward(X[rows], weights, biases), rows, True)
             loss = ((sq * m).sum(dim=(1, 2)) / m.sum(dim=(1, 2)).clamp(min=1)).sum()
             opt.zero_grad()
             loss.backward()
             opt.step()
         with torch.no_grad():
-            sq = (_forward(X, weights, biases) - Y.unsqueeze(0)) ** 2
-            val_loss = (sq * wva).sum(dim=(1, 2)) / Y.shape[1]
+            sq = error(_forward(X, weights, biases), slice(None), False)
+            val_loss = (sq * wva).sum(dim=(1, 2)) / sq.shape[2]
             better = val_loss < best
             best = torch.where(better, val_loss, best)
             best_epoch = torch.where(better, torch.full_like(best_epoch, epoch), best_epoch)

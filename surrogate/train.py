@@ -121,7 +121,8 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
         manifest = store.manifest
         if manifest.get("band"):
             raise ValueError(f"--data: {path} is a sweep dataset (one row per design over a "
-                             "band); these models train on single-frequency rows")
+                             "band); these models train on single-frequency rows (sweeps: "
+                             "surrogate.sweep_train, which hapticrom train calls for them)")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
         specs = these if specs is None else _merge_specs(specs, these, str(path))
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)

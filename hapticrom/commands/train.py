@@ -6,6 +6,7 @@
     hapticrom train --data datasets/transient --kind rom --out models/rom-default
     hapticrom train --data datasets/default --kind nn --outputs profile_um,profile_normal_um \
         --out models/nn-normal
+    hapticrom train --data datasets/default-sweep --kind nn --out models/nn-sweep   # sweeps
 
 The kinds are those of the registry :mod:`surrogate.kinds`; this command knows none by name.
 """
@@ -36,13 +37,16 @@ def _run(args: argparse.Namespace) -> int:
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds
+    from surrogate.sweep_targets import check_not_mixed
+    from surrogate.sweep_train import train_sweep
     from surrogate.train import train
 
     options = _options(args.options)
     kind = kinds.get(args.kind)
     check_dir_output("--out", args.out, kind="model", overwrite=args.overwrite,
                      reads=args.data)
-    card = train(args.data, kind.name, args.out, test_fraction=args.test_fraction,
+    fit = train_sweep if check_not_mixed(args.data) else train  # sweeps: the complex band
+    card = fit(args.data, kind.name, args.out, test_fraction=args.test_fraction,
                  seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
                  options=options, outputs=args.outputs.split(","),
                  calibration_fraction=args.calibration_fraction)
