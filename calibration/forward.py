@@ -27,6 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from calibration.likelihood import frequency_clusters
+from calibration.likelihood import profile_kernel as kernel
 from calibration.measurement import Measurement, MeasurementError
 
 __all__ = ["MAGNITUDE_OUTPUTS", "NORMAL_OUTPUTS", "ForwardModel", "needs_normal",
@@ -177,8 +179,6 @@ class ForwardModel:
         different clusters (:meth:`error_blocks`, ``shared_within_hz``; None: one cluster per
         output). ``length_mm``, ``frequency_scale_hz``, ``shared_within_hz`` and the kernels: one
         value, or one per output name (see docs/calibration.md for how these were measured)."""
-        from calibration.likelihood import profile_kernel as kernel
-
         def per(value: Any, output: str) -> Any:
             return value if isinstance(value, int | float | str) else value[output]
 
@@ -206,8 +206,6 @@ class ForwardModel:
         points at frequencies chained at most ``shared_within_hz`` apart
         (:func:`calibration.likelihood.frequency_clusters`; None: all its frequencies), as
         (sorted point positions, the output's group)."""
-        from calibration.likelihood import frequency_clusters
-
         f = np.array([p.frequency_hz for p in self.measurement.points])
         out = []
         for g in self.groups:

@@ -22,6 +22,7 @@ from fieldspec import (
 )
 
 from ..materials import Material, UnknownMaterialError, get_material
+from ..viscoelastic import default_fit
 from .model import UNIT_LOAD_KINDS, Layer, LoadKind, Scene, SceneError, Tissue
 from .tables import (
     ACTUATOR,
@@ -295,8 +296,6 @@ def _check_band_damping(out: Mapping[str, Mapping[str, Any]]) -> None:
     a = out["analysis"]
     if a["kind"] != "transient" or a.get("damping") != "hysteretic_band":
         return
-    from ..viscoelastic import default_fit  # the fit is computed on first use
-
     limit = default_fit().max_loss_factor()
     solids = [(f"tissue.layer[{i}]", layer) for i, layer in enumerate(out["tissue"]["layer"])]
     unit = out.get("unit") or {}

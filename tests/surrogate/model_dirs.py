@@ -32,12 +32,10 @@ def write(d: Path, card: dict) -> None:
 def reseal(d: Path, card: dict | None = None) -> dict:
     """Recompute every listed file's sha256 (files that exist) and the card digest."""
     card = read(d) if card is None else card
-    files = {}
-    for name in card.get("files", {}):
-        f = d / name
-        files[name] = (hashlib.sha256(f.read_bytes()).hexdigest() if f.is_file()
-                       else card["files"][name])
-    card["files"] = files
+    if isinstance(card.get("files"), dict):  # an edited map itself (not a dict) is sealed as is
+        card["files"] = {name: (hashlib.sha256((d / name).read_bytes()).hexdigest()
+                                if (d / name).is_file() else digest)
+                         for name, digest in card["files"].items()}
     sealed = seal_card(card)
     write(d, sealed)
     return sealed
