@@ -33,11 +33,9 @@ from typing import Any
 import numpy as np
 
 from fieldspec import FieldError
-from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.intervals import calibrate, residuals
 from surrogate.kinds import get as get_kind
 from surrogate.params import check_choice, check_number
-from surrogate.pod import output_columns
 from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
@@ -50,11 +48,10 @@ from surrogate.sweep_export import (
 )
 from surrogate.sweep_targets import BandTargets, SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import (
-    PREDICTS,
     _calibration_rows,
     _plain,
+    card_head,
     check_outputs,
-    edge_radius_rule,
     evaluate,
     fit_kind,
     split,
@@ -184,23 +181,8 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                                   "stop": float(data.band_hz[-1]),
                                   "step": float(data.band_hz[1] - data.band_hz[0])}}
     card: dict[str, Any] = {
-        "kind": kind, "predicts": PREDICTS + "".join(
-            f"; {name}: {PROFILE_OUTPUTS[name][1]}" for name in extra),
-        "inputs": [s.to_dict() for s in specs],
-        "outputs": [{"name": "center_amplitude_um", "unit": "um"},
-                    {"name": "edge_amplitude_um", "unit": "um"},
-                    {"name": "normalized_edge", "unit": ""},
-                    {"name": "profile_um", "unit": "um", "grid": "profile_distance_mm"},
-                    *({"name": name, "unit": "um", "grid": "profile_distance_mm"}
-                      for name in extra),
-                    {"name": "edge_radius_mm", "unit": "mm"}],
-        "log_output_columns": output_columns(data.grid_mm.size, extra),
-        "profile_distance_mm": data.grid_mm.tolist(),
-        "edge_radius": edge_radius_rule(data.codes, data.specs, data.edge_radius_mm),
-        "graph": {"file": "model.onnx", "dtype": spec.dtype,
-                  "input": "x", "outputs": ["log_mean", "log_std"]},
+        **card_head(kind, spec.dtype, specs, data, extra),
         "representation": representation,
-        "training_data": data.sources,
         "training": {"rows": int(tr.size), "held_out": int(te.size), "split": "by design",
                      "held_out_pairs": int(te.size * data.band_hz.size), "seed": seed,
                      "test_fraction": test_fraction, "pod_modes": targets.n_modes,

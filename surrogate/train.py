@@ -42,7 +42,7 @@ from surrogate.registry import (
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
 
-__all__ = ["TrainingData", "check_outputs", "edge_radius_rule", "evaluate", "fit_kind",
+__all__ = ["TrainingData", "card_head", "check_outputs", "edge_radius_rule", "evaluate", "fit_kind",
            "load_datasets", "train"]
 
 #: Interval calibration by default: this share of the training rows, when it is at least
@@ -235,6 +235,33 @@ def fit_kind(kind: SurrogateKind, X: np.ndarray, T: np.ndarray, seed: int,
     return kind.estimator(random_state=seed, **options).fit(X, T)
 
 
+
+def card_head(kind: str, dtype: str, specs: Sequence[InputSpec], data: Any,
+              extra: Sequence[str]) -> dict[str, Any]:
+    """What every steady-state model's card says of its interface, whatever it was trained on:
+    kind, what it predicts, its inputs (``specs``), outputs and their graph columns, profile
+    grid [mm], edge-radius rule, graph file and the training datasets. ``data``: a
+    :class:`TrainingData` or a sweep's data (``grid_mm``, ``codes``, ``specs``,
+    ``edge_radius_mm``, ``sources``)."""
+    return {
+        "kind": kind, "predicts": PREDICTS + "".join(
+            f"; {name}: {PROFILE_OUTPUTS[name][1]}" for name in extra),
+        "inputs": [s.to_dict() for s in specs],
+        "outputs": [{"name": "center_amplitude_um", "unit": "um"},
+                    {"name": "edge_amplitude_um", "unit": "um"},
+                    {"name": "normalized_edge", "unit": ""},
+                    {"name": "profile_um", "unit": "um", "grid": "profile_distance_mm"},
+                    *({"name": name, "unit": "um", "grid": "profile_distance_mm"}
+                      for name in extra),
+                    {"name": "edge_radius_mm", "unit": "mm"}],
+        "log_output_columns": output_columns(data.grid_mm.size, extra),
+        "profile_distance_mm": data.grid_mm.tolist(),
+        "edge_radius": edge_radius_rule(data.codes, data.specs, data.edge_radius_mm),
+        "graph": {"file": "model.onnx", "dtype": dtype,
+                  "input": "x", "outputs": ["log_mean", "log_std"]},
+        "training_data": data.sources,
+    }
+
 def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
           test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
           overwrite: bool = False, categorical: str = "onehot",
@@ -275,22 +302,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     B, b = targets.output_map()
     est = fit_kind(spec, X[tr], T, seed, dict(options or {}))
     card: dict[str, Any] = {
-        "kind": kind, "predicts": PREDICTS + "".join(
-            f"; {name}: {PROFILE_OUTPUTS[name][1]}" for name in extra),
-        "inputs": [s.to_dict() for s in data.specs],
-        "outputs": [{"name": "center_amplitude_um", "unit": "um"},
-                    {"name": "edge_amplitude_um", "unit": "um"},
-                    {"name": "normalized_edge", "unit": ""},
-                    {"name": "profile_um", "unit": "um", "grid": "profile_distance_mm"},
-                    *({"name": name, "unit": "um", "grid": "profile_distance_mm"}
-                      for name in extra),
-                    {"name": "edge_radius_mm", "unit": "mm"}],
-        "log_output_columns": output_columns(data.grid_mm.size, extra),
-        "profile_distance_mm": data.grid_mm.tolist(),
-        "edge_radius": edge_radius_rule(data.codes, data.specs, data.edge_radius_mm),
-        "graph": {"file": "model.onnx", "dtype": spec.dtype,
-                  "input": "x", "outputs": ["log_mean", "log_std"]},
-        "training_data": data.sources,
+        **card_head(kind, spec.dtype, data.specs, data, extra),
         "training": {"rows": int(tr.size), "held_out": int(te.size), "seed": seed,
                      "test_fraction": test_fraction, "pod_modes": int(targets.pod.modes_.shape[0]),
                      "pod_energy": float(targets.pod.energy_[-1]),
