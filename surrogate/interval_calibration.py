@@ -61,7 +61,9 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
     n_check = round(check_fraction * perm.size)
     cal, check = np.sort(perm[n_check:]), np.sort(perm[:n_check])
     r_cal, r_check = (_residuals(raw, rows, which, extra, sweep) for which in (cal, check))
-    entry = calibrate(r_cal, extra=extra)
+    # a sweep model's pairs are exchangeable only design by design (surrogate.intervals)
+    entry = calibrate(r_cal, extra=extra,
+                      group=np.repeat(cal, rows.band_hz.size) if sweep else None)
     entry["rows"] = {"from": "the rows training held out (training.seed, "
                      "training.test_fraction)", "seed": seed, "calibration": int(cal.size),
                      "check": int(check.size), "data": rows.sources}

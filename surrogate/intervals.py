@@ -19,7 +19,20 @@ smallest of its n residuals (split conformal: exp(mu +- 1.96 f sigma) then cover
                              "groups": {name: {"columns": [...], "factor": f, "rows": n}}, ...}
 
 and the run-time predictor multiplies its ``log_std`` column k by ``log_std_scale[k]`` (a card
-without the key: 1). :func:`calibrate` computes it from a model's raw predictions;
+without the key: 1).
+
+Rows that come in groups -- a sweep model's (design, band frequency) pairs, where the residuals
+of one design's frequencies move together -- are not exchangeable one by one, only the groups
+are. For them (``group`` given) the factor is the hierarchical split-conformal quantile: every
+group carries the same mass 1 / (K + 1) shared equally by its scores, one mass 1 / (K + 1) sits
+at +infinity, and r_(level) is the smallest score at which the cumulative mass reaches the
+level. A new group's score at a random one of its points is then covered with probability at
+least the level for exchangeable groups (K groups; the hierarchical conformal prediction of
+Lee, Barber and Willett, 2023). With K equal groups of N scores it is the
+ceil(level (K + 1) N)-th smallest of the K N pooled scores: the pooled quantile at the level
+(1 + 1 / K) -- 95.6 % for 161 calibration designs, where the pooled 95 % quantile covered
+92-95 % of new designs.
+ :func:`calibrate` computes it from a model's raw predictions;
 :func:`surrogate.interval_calibration.calibrate_model_dir` (``hapticrom models
 calibrate-intervals``) does it for a trained model on held-out rows of its own data that it
 never saw, and re-seals the card.
@@ -33,8 +46,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LEVEL", "Z95", "calibrate", "coverage", "groups", "normalised_residual",
-           "residuals"]
+__all__ = ["LEVEL", "Z95", "calibrate", "conformal_quantile", "coverage", "groups",
+           "normalised_residual", "residuals"]
 
 LEVEL = 0.95
 Z95 = 1.959964
@@ -75,23 +88,49 @@ def residuals(pred: dict[str, np.ndarray], center_um: np.ndarray, profile_um: np
     return normalised_residual(truth, value, log_std)
 
 
-def calibrate(r: np.ndarray, level: float = LEVEL, extra: Sequence[str] = ()
-              ) -> dict[str, Any]:
+def calibrate(r: np.ndarray, level: float = LEVEL, extra: Sequence[str] = (),
+              group: np.ndarray | None = None) -> dict[str, Any]:
     """The ``interval_calibration`` entry for residuals ``r`` (n, K) of calibration rows (of a
-    model with the extra profile outputs ``extra``)."""
+    model with the extra profile outputs ``extra``); ``group`` (n,): the group of each row
+    (e.g. its design) when rows are exchangeable only as groups (the module docstring)."""
     n, k = r.shape
     if n < 20:
         raise ValueError(f"{n} calibration rows: at least 20 are needed for a 95 % factor")
+    n_groups = None if group is None else np.unique(group).size
+    if n_groups is not None and level * (n_groups + 1) / n_groups >= 1.0:
+        raise ValueError(f"{n_groups} calibration groups: a {level:.0%} factor needs more than "
+                         f"{math.ceil(level / (1 - level))}")
     scale = np.ones(k)
     entries = {}
     for name, cols in groups(k, extra).items():
-        pooled = np.sort(r[:, cols].ravel())
-        rank = min(math.ceil((pooled.size + 1) * level), pooled.size)
-        factor = float(pooled[rank - 1] / Z95)
+        factor = float(conformal_quantile(r[:, cols], level, group) / Z95)
         scale[cols] = factor
         entries[name] = {"columns": cols, "factor": factor, "rows": int(n)}
-    return {"method": "split-conformal", "level": level, "z": Z95,
+        if n_groups is not None:
+            entries[name]["groups"] = int(n_groups)
+    method = "split-conformal" if group is None else "hierarchical split-conformal"
+    return {"method": method, "level": level, "z": Z95,
             "log_std_scale": scale.tolist(), "groups": entries}
+
+
+def conformal_quantile(scores: np.ndarray, level: float, group: np.ndarray | None = None
+                       ) -> float:
+    """The conformal quantile of ``scores`` (n rows, any columns pooled): the
+    ceil((n_scores + 1) level)-th smallest when every score is exchangeable (``group`` None),
+    the hierarchical one over the groups of the rows otherwise (the module docstring)."""
+    if group is None:
+        pooled = np.sort(scores.ravel())
+        rank = min(math.ceil((pooled.size + 1) * level), pooled.size)
+        return float(pooled[rank - 1])
+    labels, index, size = np.unique(group, return_inverse=True, return_counts=True)
+    per_score = np.repeat(1.0 / ((labels.size + 1) * size[index] * scores.shape[1]),
+                          scores.shape[1])
+    order = np.argsort(scores.ravel(), kind="stable")
+    mass = np.cumsum(per_score[order])
+    # the first score whose cumulative mass reaches the level (a relative tolerance keeps an
+    # exact tie, e.g. level (K + 1) N an integer, from rounding one score too far)
+    at = int(np.searchsorted(mass, level * (1 - 1e-12)))
+    return float(scores.ravel()[order[at]])
 
 
 def coverage(r: np.ndarray, scale: Sequence[float] | np.ndarray | None = None,

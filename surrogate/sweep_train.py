@@ -203,7 +203,8 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     card["export_parity_max_abs_dln"] = _parity(est, targets, predictor, data, X, te, normal)
     if cal.size:
         codes, centre, profile, ext = pair_rows(data, cal, normal)
-        entry = calibrate(residuals(predictor.predict(codes), centre, profile, ext), extra=extra)
+        entry = calibrate(residuals(predictor.predict(codes), centre, profile, ext), extra=extra,
+                          group=np.repeat(cal, data.band_hz.size))  # designs, not pairs
         entry["rows"] = {"from": "training designs kept out of the fit (seed + 1), every band "
                          "frequency", "calibration": int(cal.size),
                          "pairs": int(cal.size * data.band_hz.size)}

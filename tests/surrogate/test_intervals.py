@@ -10,7 +10,7 @@ import pytest
 from synthetic import make_dataset
 
 from surrogate.interval_calibration import _write_card, calibrate_model_dir
-from surrogate.intervals import Z95, calibrate, coverage
+from surrogate.intervals import Z95, calibrate, conformal_quantile, coverage
 from surrogate.runtime import ModelFileError, PredictorInputError, load_predictor
 from surrogate.runtime.card import verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, CHUNK_ROWS
@@ -32,6 +32,53 @@ def test_conformal_factor_makes_new_rows_covered():
         assert 0.93 <= v <= 0.97
     with pytest.raises(ValueError, match="at least 20"):
         calibrate(r_cal[:10])
+
+
+def test_hierarchical_quantile_is_the_pooled_rank_at_level_times_one_plus_one_over_k():
+    rng = np.random.default_rng(1)
+    k_groups, n_each = 30, 20
+    scores = rng.random((k_groups * n_each, 1))
+    group = np.repeat(np.arange(k_groups), n_each)
+    rank = int(np.ceil(0.95 * (k_groups + 1) * n_each))  # 589 of the 600 pooled scores
+    assert conformal_quantile(scores, 0.95, group) == np.sort(scores.ravel())[rank - 1]
+    # groups of one row: the ordinary split-conformal rank ceil((n + 1) level)
+    single = scores[:40]
+    assert conformal_quantile(single, 0.95, np.arange(40)) == conformal_quantile(single, 0.95)
+    # a row's columns share its group's mass: two columns of one row count as that row
+    wide = np.column_stack([scores[:, 0], scores[:, 0]])
+    assert conformal_quantile(wide, 0.95, group) == conformal_quantile(scores, 0.95, group)
+    # unequal groups: each group carries the same mass whatever its size
+    uneven = np.r_[np.zeros(21), np.ones(1000)][:, None]  # 21 groups of 1 at 0, one of 1000 at 1
+    labels = np.r_[np.arange(21), np.full(1000, 21)]
+    assert conformal_quantile(uneven, 0.9, labels) == 0.0  # mass at 0: 21/23 = 0.913 >= 0.9
+    assert conformal_quantile(uneven, 0.9) == 1.0  # pooled, the big group outweighs
+
+
+def test_hierarchical_factor_covers_new_groups_where_the_pooled_one_falls_short():
+    """Residuals shared within a group (a design's frequencies): the pooled 95 % quantile
+    covers about K / (K + 1) of new groups (29/31 here), the hierarchical one at least 95 %."""
+    rng = np.random.default_rng(2)
+    k_groups, n_each, trials = 30, 20, 2000
+    group = np.repeat(np.arange(k_groups), n_each)
+    covered = {"pooled": [], "hierarchical": []}
+    for _ in range(trials):
+        shared = rng.standard_normal(k_groups + 1)
+        r = np.abs(shared[:, None] + 0.01 * rng.standard_normal((k_groups + 1, n_each)))
+        cal, new = r[:-1].reshape(-1, 1), r[-1]
+        for name, g in (("pooled", None), ("hierarchical", group)):
+            covered[name].append(np.mean(new <= conformal_quantile(cal, 0.95, g)))
+    assert np.mean(covered["hierarchical"]) >= 0.95
+    assert np.mean(covered["pooled"]) < 0.945
+
+
+def test_hierarchical_calibration_names_its_method_and_refuses_too_few_groups():
+    rng = np.random.default_rng(3)
+    r = np.abs(rng.standard_normal((30 * 4, 8)))
+    entry = calibrate(r, group=np.repeat(np.arange(30), 4))
+    assert entry["method"] == "hierarchical split-conformal"
+    assert entry["groups"]["center"]["groups"] == 30
+    with pytest.raises(ValueError, match="19 calibration groups: a 95% factor needs more than 19"):
+        calibrate(r[:19 * 4], group=np.repeat(np.arange(19), 4))
 
 
 @pytest.fixture()

@@ -153,12 +153,21 @@ def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
     assert not (tmp_path / "g").exists() and not (tmp_path / "n").exists()
 
 
-def test_intervals_of_a_sweep_model_calibrate_on_its_held_out_designs(sweep_model):
+def test_intervals_of_a_sweep_model_calibrate_on_its_held_out_designs(sweep_data, sweep_model,
+                                                                     tmp_path):
     from surrogate.interval_calibration import calibrate_model_dir
 
-    entry = calibrate_model_dir(sweep_model[0], write=False)
+    # the designs are the exchangeable units: 5 calibration designs cannot give a 95 % factor
+    with pytest.raises(ValueError, match="5 calibration groups: a 95% factor needs more than 19"):
+        calibrate_model_dir(sweep_model[0], write=False)
+    half = tmp_path / "nn-sweep-half"  # 24 designs held out: 22 calibrate, 2 check
+    card = train_sweep([sweep_data], "nn", half, n_modes=8, options=dict(OPTIONS),
+                       outputs=OUTPUTS, test_fraction=0.5)
+    entry = calibrate_model_dir(half, write=False, check_fraction=0.1)
+    assert entry["method"] == "hierarchical split-conformal"
+    assert entry["groups"]["center"]["groups"] == 22
     rows = entry["rows"]
-    assert rows["calibration"] + rows["check"] == sweep_model[1]["training"]["held_out"]
+    assert rows["calibration"] + rows["check"] == card["training"]["held_out"]
     assert rows["pairs_per_design"] == BAND_HZ.size
     assert set(entry["groups"]) == {"center", "edge", "profile", "profile_normal_um"}
     assert 0.0 <= entry["coverage95_check"]["after"]["center_amplitude_um"] <= 1.0
