@@ -5,16 +5,22 @@ frequency -> ln magnitudes, exported as the one graph contract of :mod:`surrogat
       -> each member's targets y = [ln s, POD coefficients]       (members, batch, 1 + k)
       -> t = (f - f_0) / step from the frequency's feature, clamped to [0, n_f - 1];
          i = min(floor(t), n_f - 2), w = t - i
-      -> normalised components z = mean_t + y[1:] @ modes_t at the band's grid points i and
-         i + 1, linearly interpolated with the weight w            (members, batch, P, 6)
+      -> per POD block j (centre + edge; the profile beyond the edge), with the block's
+         factored basis modes_j[f] = A_j[f] @ Psi_j (:mod:`surrogate.sweep_basis`):
+         v = a_j[t] + y_j @ A_j[t] at the band's grid points i and i + 1 (one gather of
+         both, k_j x 2 S_j per row), linearly interpolated with the weight w, then
+         z_j = v @ Psi_j (one dense product shared by every row)  (members, batch, P, 6)
       -> ln |u| = ln s + 0.5 ln(sum of squares of the six parts)   (members, batch, P)
       -> log outputs [centre, edge, edge / centre, profile, (normal profile)]
       -> log_mean, log_std: their mean and (population) std over the members.
 
-Rebuilding two grid points per row rather than the whole band costs 2 / n_f of it. The modes
-and the means carry the per-location weights of :class:`surrogate.sweep_targets.BandTargets`,
-so the graph needs nothing outside it. :func:`reference_log_outputs` is the graph-free numpy version
-(training checks the exported graph against it).
+Per row the decode gathers k_j x 2 S_j numbers of each block (not the band's k x P * 6 modes
+at two grid points, with the zeros off the blocks) and does 2 M (2 k_j S_j + S_j L_j)
+multiply-adds' worth of FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
+members' target scaling is folded into their last layer. Psi carries the per-location
+weights of :class:`surrogate.sweep_targets.BandTargets`, so the graph needs nothing outside
+it. :func:`reference_log_outputs` is the graph-free numpy version (through the same factored
+basis; training checks the exported graph against it).
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ import numpy as np
 import torch
 
 from surrogate.export import export_module
-from surrogate.nn import MLPEnsembleRegressor
+from surrogate.nn import EnsembleModule, MLPEnsembleRegressor
 from surrogate.sweep_targets import (
     TINY,
     BandTargets,
@@ -37,43 +43,60 @@ from surrogate.sweep_targets import (
 )
 
 __all__ = ["BandDecoder", "SweepEnsembleModule", "export_sweep_nn", "magnitude_error",
-           "member_targets",
-           "reference_log_outputs"]
+           "member_targets", "reference_log_outputs", "target_module"]
 
 
 class BandDecoder(torch.nn.Module):
     """Member targets (M, b, 1 + k) and a fractional band index t (b,) -> log outputs
-    (M, b, 3 + m [+ m]) (``normal``: with the ln |u_z| profile block)."""
+    (M, b, 3 + m [+ m]) (``normal``: with the ln |u_z| profile block), through the factored
+    basis of each block (:attr:`surrogate.sweep_targets.BandTargets.factors`)."""
 
     def __init__(self, targets: BandTargets, normal: bool = False) -> None:
         super().__init__()
-        modes, mean = targets.band_basis()
         f32 = torch.float32
-        self.register_buffer("modes", torch.as_tensor(modes, dtype=f32))   # (n_f, k, L)
-        self.register_buffer("mean", torch.as_tensor(mean, dtype=f32))     # (n_f, L)
         self.n_f, self.P = targets.shape_
         self.normal = normal
+        self.rows = targets.block_modes()
+        self.blocks = len(self.rows)
+        for j, fac in enumerate(targets.factors):
+            # grid point i and i + 1 side by side, so a row gathers once: (n_f - 1, k, 2 S)
+            pair = np.concatenate([fac.coef[:-1], fac.coef[1:]], axis=-1)
+            pair_mean = np.concatenate([fac.mean[:-1], fac.mean[1:]], axis=-1)
+            self.register_buffer(f"coef{j}", torch.as_tensor(fac.coef, dtype=f32))
+            self.register_buffer(f"mean{j}", torch.as_tensor(fac.mean, dtype=f32))
+            self.register_buffer(f"pair{j}", torch.as_tensor(pair, dtype=f32))
+            self.register_buffer(f"pair_mean{j}", torch.as_tensor(pair_mean, dtype=f32))
+            self.register_buffer(f"psi{j}", torch.as_tensor(fac.psi, dtype=f32))  # (S, L_j)
+
+    def _buffer(self, name: str, j: int) -> torch.Tensor:
+        return getattr(self, f"{name}{j}")
 
     def components(self, y: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, P, 6) at fractional band indices ``t`` (b,)."""
         t = t.clamp(0.0, float(self.n_f - 1))
         i0 = t.floor().clamp(max=float(self.n_f - 2))
-        w = (t - i0).unsqueeze(-1)
+        w = (t - i0).unsqueeze(-1).unsqueeze(-1)                       # (b, 1, 1)
         i0 = i0.long()
         c = y[..., 1:].transpose(0, 1)                                 # (b, M, k)
-        # one (M x k) @ (k x L) product per row and grid point, then the weights: the same
-        # arithmetic as interpolating the basis, without a (b, k, L) interpolated copy
-        z0 = torch.matmul(c, self.modes.index_select(0, i0)) \
-            + self.mean.index_select(0, i0).unsqueeze(1)               # (b, M, L)
-        z1 = torch.matmul(c, self.modes.index_select(0, i0 + 1)) \
-            + self.mean.index_select(0, i0 + 1).unsqueeze(1)
-        z = z0 + w.unsqueeze(-1) * (z1 - z0)
-        return z.transpose(0, 1).unflatten(-1, (self.P, 6))
+        parts = []
+        for j, rows in enumerate(self.rows):
+            # one (M x k_j) @ (k_j x 2 S) product per row: both grid points' spatial
+            # coordinates, then the linear interpolation, then one shared product by psi
+            v = torch.matmul(c[..., rows], self._buffer("pair", j).index_select(0, i0)) \
+                + self._buffer("pair_mean", j).index_select(0, i0).unsqueeze(1)
+            S = v.shape[-1] // 2
+            v = v[..., :S] + w * (v[..., S:] - v[..., :S])             # (b, M, S)
+            parts.append(torch.matmul(v.transpose(0, 1), self._buffer("psi", j)))
+        return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
     def at_grid(self, y: torch.Tensor, index: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, F, P, 6) at the band grid points ``index`` (F,)."""
-        z = self.mean[index] + torch.einsum("mbk,fkl->mbfl", y[..., 1:], self.modes[index])
-        return z.unflatten(-1, (self.P, 6))
+        parts = []
+        for j, rows in enumerate(self.rows):
+            v = self._buffer("mean", j)[index] + torch.einsum(
+                "mbk,fks->mbfs", y[..., 1:][..., rows], self._buffer("coef", j)[index])
+            parts.append(torch.matmul(v, self._buffer("psi", j)))
+        return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
     def log_outputs(self, y: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
         """Log outputs of components ``z`` (M, b, [F,] P, 6) and targets ``y`` (M, b, 1 + k)."""
@@ -96,7 +119,7 @@ class SweepEnsembleModule(torch.nn.Module):
     def __init__(self, estimator: MLPEnsembleRegressor, decoder: BandDecoder,
                  frequency_low: float, frequency_high: float, band_hz: np.ndarray) -> None:
         super().__init__()
-        self.ensemble = estimator.to_module()
+        self.ensemble = target_module(estimator)
         self.decoder = decoder
         self.d = int(estimator.n_features_in_)
         step = float(band_hz[1] - band_hz[0])
@@ -105,20 +128,30 @@ class SweepEnsembleModule(torch.nn.Module):
         self.t_offset = float((frequency_low - band_hz[0]) / step)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        y = torch.matmul(self.ensemble.members(x[:, :self.d]), self.ensemble.B) \
-            + self.ensemble.b
+        y = self.ensemble.members(x[:, :self.d])
         out = self.decoder(y, x[:, self.d] * self.t_scale + self.t_offset)
         mean = out.mean(dim=0)
         std = ((out - mean) ** 2).mean(dim=0).sqrt()
         return mean, std
 
 
+def target_module(estimator: MLPEnsembleRegressor) -> EnsembleModule:
+    """The members as a torch module whose ``members(x)`` are the targets themselves: the
+    estimator's target scaling (a diagonal map) folded into the last layer, so the graph
+    does no (k x k) product by it."""
+    module = estimator.to_module()
+    scale = torch.as_tensor(estimator.y_scale_, dtype=torch.float32)
+    with torch.no_grad():
+        module.weights[-1].mul_(scale)
+        module.biases[-1].mul_(scale).add_(torch.as_tensor(estimator.y_mean_,
+                                                           dtype=torch.float32))
+    return module
+
+
 def member_targets(estimator: MLPEnsembleRegressor, X: np.ndarray) -> np.ndarray:
     """Every member's targets (members, n, 1 + k) for design features ``X`` (float64)."""
-    module = estimator.to_module()
     with torch.no_grad():
-        x = torch.as_tensor(X, dtype=torch.float32)
-        y = torch.matmul(module.members(x), module.B) + module.b
+        y = target_module(estimator).members(torch.as_tensor(X, dtype=torch.float32))
     return y.double().numpy()
 
 
