@@ -1,18 +1,24 @@
 """The band basis of a sweep model factored for a cheap decode: per POD block, a spatial basis
-shared by every band frequency.
+shared by every band frequency, and per group of modes its own number of spatial vectors.
 
 A block of :class:`surrogate.sweep_targets.BandTargets` rebuilds the weighted normalised
 components of its ``L`` values (locations x 6 parts) at band frequency ``f`` as
 ``mean[f] + c @ modes[f]`` with ``modes[f]`` of shape (k, L). Factored::
 
-    modes[f] ~= A[f] @ Psi,   mean[f] ~= a0[f] @ Psi,   A[f]: (k, S), Psi: (S, L), S <= L
+    modes[f][g] ~= A_g[f] @ Psi[:S_g],   mean[f] ~= a[f] @ Psi,   Psi: (S, L), S = max S_g
 
-with ``Psi`` the leading right singular vectors of the block's weighted components over the
-fitting designs and every band frequency (uncentred: the mean is rebuilt too), so a row of
-the decode gathers ``A`` at its two grid points (k x S each) and all rows share one dense
-product by ``Psi``. The rank ``S`` is the smallest whose relative error of those components,
-sqrt(discarded / total squared singular values), is at most ``tol``; at ``S = L`` ``Psi`` is
-orthogonal and the factorisation exact.
+with ``Psi`` the right singular vectors of the block's weighted components over the fitting
+designs and every band frequency (uncentred: the mean is rebuilt too) and ``g`` the groups of
+consecutive POD modes (:data:`GROUP_EDGES`). A row of the decode gathers, per group, ``A_g`` at
+its two grid points (k_g x S_g each) and all rows share one dense product by ``Psi``, so the
+per-row work is sum_g k_g S_g rather than k L.
+
+The POD coefficients of the fitting designs are centred and mutually orthogonal, so the
+squared error of the components over those designs is exactly the sum of each mode's
+(coefficient energy x its basis energy beyond S_g) plus the mean's: the ranks are the
+cheapest (least sum_g k_g S_g, by a Lagrangian sweep) whose relative error
+sqrt(error / total) is at most ``tol``. At S_g = L ``Psi`` is orthogonal and the
+factorisation exact.
 
 Arrays are dimensionless (components divided by the band's RMS centre amplitude and, in the
 weighted space, by a per-location weight; :attr:`SpatialFactor.psi` has the weights folded
@@ -21,34 +27,50 @@ back in, so it maps to normalised components).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SpatialFactor", "factor_block"]
+__all__ = ["GROUP_EDGES", "SpatialFactor", "factor_block", "tail_error"]
+
+#: First mode of each group after the first (groups of 16, 16, 32, 64, 128, ... modes): the
+#: leading modes carry most of the energy and need the most spatial vectors.
+GROUP_EDGES = (16, 32, 64, 128, 256, 512, 1024)
 
 
 @dataclass(frozen=True)
 class SpatialFactor:
-    """One block's factored basis. ``coef``: (n_f, k, S) per band frequency, ``mean``:
-    (n_f, S), ``psi``: (S, L) with the location weights folded in; ``rel_error``: the relative
-    error of the block's weighted components on the fitting designs at this rank;
-    ``spectrum``: (L,) all squared singular values, descending (the rank choice's data)."""
+    """One block's factored basis. ``groups``: the groups' mode ranges in the block,
+    ``coefs``: per group (n_f, k_g, S_g), ``mean``: (n_f, S), ``psi``: (S, L) with the
+    location weights folded in (S = the largest S_g); ``rel_error``: the relative error of
+    the block's weighted components on the fitting designs at these ranks; ``spectrum``:
+    (L,) the squared singular values of those components, descending."""
 
-    coef: np.ndarray
+    groups: tuple[slice, ...]
+    coefs: tuple[np.ndarray, ...]
     mean: np.ndarray
     psi: np.ndarray
     rel_error: float
     spectrum: np.ndarray
 
     @property
+    def ranks(self) -> tuple[int, ...]:
+        """S_g of each group."""
+        return tuple(int(c.shape[2]) for c in self.coefs)
+
+    @property
     def rank(self) -> int:
-        """S, the spatial basis's size."""
+        """S, the spatial basis's size (the largest S_g)."""
         return int(self.psi.shape[0])
 
+    def row_work(self) -> int:
+        """Numbers gathered per row and grid point: sum_g k_g S_g."""
+        return sum(int(c.shape[1] * c.shape[2]) for c in self.coefs)
+
     def modes(self) -> np.ndarray:
-        """The effective basis (n_f, k, L): ``coef[f] @ psi``."""
-        return self.coef @ self.psi
+        """The effective basis (n_f, k, L)."""
+        return np.concatenate([c @ self.psi[:c.shape[2]] for c in self.coefs], axis=1)
 
     def means(self) -> np.ndarray:
         """The effective means (n_f, L): ``mean[f] @ psi``."""
@@ -63,26 +85,91 @@ def tail_error(spectrum: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(tail, 0.0) / total) if total > 0 else np.zeros(tail.size)
 
 
+def mode_groups(k: int) -> tuple[slice, ...]:
+    """The groups of ``k`` consecutive modes (:data:`GROUP_EDGES`)."""
+    edges = [0, *(e for e in GROUP_EDGES if e < k), k]
+    return tuple(slice(a, b) for a, b in itertools.pairwise(edges))
+
+
+def _ranks(tails: np.ndarray, sizes: np.ndarray, budget: float) -> np.ndarray:
+    """Per group the rank S_g in 1..L of least sum sizes_g S_g with sum_g tails[g, S_g] <=
+    ``budget`` (``tails`` (G, L + 1): each group's squared error keeping S vectors), over
+    the Lagrangian's choices argmin_S tails[g, S] + mu sizes_g S."""
+    L = tails.shape[1] - 1
+    S = np.arange(1, L + 1)
+
+    def choose(mu: float) -> np.ndarray:
+        return 1 + np.argmin(tails[:, 1:] + mu * sizes[:, None] * S[None, :], axis=1)
+
+    def error(ranks: np.ndarray) -> float:
+        return float(tails[np.arange(len(ranks)), ranks].sum())
+
+    if error(choose(0.0)) > budget:
+        return np.full(len(sizes), L)
+    lo, hi = 0.0, float(tails.max()) + 1.0  # at hi every group keeps one vector
+    if error(choose(hi)) <= budget:
+        return choose(hi)
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if error(choose(mid)) <= budget else (lo, mid)
+    return choose(lo)
+
+
 def factor_block(modes: np.ndarray, mean: np.ndarray, coefficients: np.ndarray,
-                 weights: np.ndarray, *, tol: float = 1e-3, rank: int | None = None
-                 ) -> SpatialFactor:
+                 weights: np.ndarray, *, tol: float = 1e-3,
+                 ranks: tuple[int, ...] | None = None) -> SpatialFactor:
     """Factor one block: weighted ``modes`` (n_f, k, L), ``mean`` (n_f, L), the fitting
-    designs' ``coefficients`` (n, k) and the per-value ``weights`` (L,) (a location's weight on
-    each of its 6 parts). The rank is ``rank`` when given, else the smallest with relative
-    error <= ``tol`` (at least 1; ``tol`` 0: L, exact)."""
-    n_f, L = modes.shape[0], modes.shape[2]
-    gram = np.zeros((L, L))
-    for f in range(n_f):  # the (n * n_f, L) components, one frequency at a time
-        z = mean[f] + coefficients @ modes[f]
-        gram += z.T @ z
+    designs' (centred) POD ``coefficients`` (n, k) and the per-value ``weights`` (L,) (a
+    location's weight on each of its 6 parts). The ranks are ``ranks`` (one per group of
+    :func:`mode_groups`) when given, else the cheapest with relative error <= ``tol``
+    (``tol`` 0: every S_g = L, exact)."""
+    k, L = modes.shape[1:]
+    n = coefficients.shape[0]
+    energy = np.sum(np.square(coefficients), axis=0)                   # (k,)
+    gram = n * mean.T @ mean + np.einsum("fkl,k,fkm->lm", modes, energy, modes)
     spectrum, vectors = np.linalg.eigh(gram)
     order = np.argsort(spectrum)[::-1]
     spectrum, vectors = np.maximum(spectrum[order], 0.0), vectors[:, order]
-    errors = tail_error(spectrum)
-    if rank is None:  # tol 0: every vector (the discarded tail may round to 0 before L)
-        rank = L if tol <= 0 else max(1, int(np.argmax(errors <= tol)))
-    if not 1 <= rank <= L:
-        raise ValueError(f"spatial rank {rank}: must be in 1..{L}")
-    keep = vectors[:, :rank]                                 # (L, S), orthonormal columns
-    return SpatialFactor(coef=modes @ keep, mean=mean @ keep, psi=keep.T * weights[None, :],
-                         rel_error=float(errors[rank]), spectrum=spectrum)
+    rotated = modes @ vectors                                          # (n_f, k, L)
+    groups = mode_groups(k)
+    # each group's and the mean's squared error keeping S = 0..L vectors
+    per_mode = energy[:, None] * np.sum(np.square(rotated), axis=0)    # (k, L)
+    tails = np.array([_tails(per_mode[g].sum(axis=0)) for g in groups])
+    mean_tail = _tails(n * np.sum(np.square(mean @ vectors), axis=0))
+    total = float(spectrum.sum())
+    mean_rank = 1
+    if ranks is None and tol <= 0:
+        ranks = (L,) * len(groups)
+    elif ranks is None:  # the mean as one more group, of one mode (S is then its rank or more)
+        sizes = np.array([g.stop - g.start for g in groups] + [1], dtype=float)
+        chosen = _ranks(np.vstack([tails, mean_tail]), sizes, tol**2 * total)
+        ranks, mean_rank = tuple(int(r) for r in chosen[:-1]), int(chosen[-1])
+    if len(ranks) != len(groups) or not all(1 <= r <= L for r in ranks):
+        raise ValueError(f"spatial ranks {tuple(ranks)}: need {len(groups)} ranks in 1..{L}")
+    S = max(*ranks, mean_rank)
+    err = mean_tail[S] + sum(tails[j, r] for j, r in enumerate(ranks))
+    groups, ranks = _merge(groups, tuple(ranks))
+    return SpatialFactor(groups=groups,
+                         coefs=tuple(rotated[:, g, :r] for g, r in zip(groups, ranks,
+                                                                       strict=True)),
+                         mean=mean @ vectors[:, :S], psi=vectors[:, :S].T * weights[None, :],
+                         rel_error=float(np.sqrt(max(err, 0.0) / total)) if total > 0 else 0.0,
+                         spectrum=spectrum)
+
+
+def _merge(groups: tuple[slice, ...], ranks: tuple[int, ...]
+           ) -> tuple[tuple[slice, ...], tuple[int, ...]]:
+    """Adjacent groups of the same rank as one (fewer products in the graph)."""
+    out_groups, out_ranks = [groups[0]], [ranks[0]]
+    for g, r in zip(groups[1:], ranks[1:], strict=True):
+        if r == out_ranks[-1]:
+            out_groups[-1] = slice(out_groups[-1].start, g.stop)
+        else:
+            out_groups.append(g)
+            out_ranks.append(r)
+    return tuple(out_groups), tuple(out_ranks)
+
+
+def _tails(energy_per_vector: np.ndarray) -> np.ndarray:
+    """(L + 1,) the energy beyond the first S = 0..L vectors."""
+    return np.concatenate([np.cumsum(energy_per_vector[::-1])[::-1], [0.0]])

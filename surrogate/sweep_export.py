@@ -57,35 +57,44 @@ class BandDecoder(torch.nn.Module):
         self.n_f, self.P = targets.shape_
         self.normal = normal
         self.rows = targets.block_modes()
-        self.blocks = len(self.rows)
+        self.groups: list[list[slice]] = []
         for j, fac in enumerate(targets.factors):
-            # grid point i and i + 1 side by side, so a row gathers once: (n_f - 1, k, 2 S)
-            pair = np.concatenate([fac.coef[:-1], fac.coef[1:]], axis=-1)
+            self.groups.append(list(fac.groups))
+            for g, coef in enumerate(fac.coefs):
+                # grid points i and i + 1 side by side, so a row gathers once:
+                # (n_f - 1, k_g, 2 S_g)
+                pair = np.concatenate([coef[:-1], coef[1:]], axis=-1)
+                self.register_buffer(f"coef{j}_{g}", torch.as_tensor(coef, dtype=f32))
+                self.register_buffer(f"pair{j}_{g}", torch.as_tensor(pair, dtype=f32))
             pair_mean = np.concatenate([fac.mean[:-1], fac.mean[1:]], axis=-1)
-            self.register_buffer(f"coef{j}", torch.as_tensor(fac.coef, dtype=f32))
             self.register_buffer(f"mean{j}", torch.as_tensor(fac.mean, dtype=f32))
-            self.register_buffer(f"pair{j}", torch.as_tensor(pair, dtype=f32))
             self.register_buffer(f"pair_mean{j}", torch.as_tensor(pair_mean, dtype=f32))
             self.register_buffer(f"psi{j}", torch.as_tensor(fac.psi, dtype=f32))  # (S, L_j)
 
-    def _buffer(self, name: str, j: int) -> torch.Tensor:
-        return getattr(self, f"{name}{j}")
+    def _buffer(self, name: str, *index: int) -> torch.Tensor:
+        return getattr(self, name + "_".join(str(i) for i in index))
 
     def components(self, y: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, P, 6) at fractional band indices ``t`` (b,)."""
         t = t.clamp(0.0, float(self.n_f - 1))
         i0 = t.floor().clamp(max=float(self.n_f - 2))
-        w = (t - i0).unsqueeze(-1).unsqueeze(-1)                       # (b, 1, 1)
+        w = (t - i0).unsqueeze(-1)                                     # (b, 1)
         i0 = i0.long()
         c = y[..., 1:].transpose(0, 1)                                 # (b, M, k)
         parts = []
         for j, rows in enumerate(self.rows):
-            # one (M x k_j) @ (k_j x 2 S) product per row: both grid points' spatial
-            # coordinates, then the linear interpolation, then one shared product by psi
-            v = torch.matmul(c[..., rows], self._buffer("pair", j).index_select(0, i0)) \
-                + self._buffer("pair_mean", j).index_select(0, i0).unsqueeze(1)
-            S = v.shape[-1] // 2
-            v = v[..., :S] + w * (v[..., S:] - v[..., :S])             # (b, M, S)
+            cj = c[..., rows]
+            mean = self._buffer("pair_mean", j).index_select(0, i0)    # (b, 2 S)
+            S = mean.shape[-1] // 2
+            v = (mean[:, :S] + w * (mean[:, S:] - mean[:, :S])).unsqueeze(1)
+            for g, modes in enumerate(self.groups[j]):
+                # one (M x k_g) @ (k_g x 2 S_g) product per row: both grid points' spatial
+                # coordinates, interpolated, padded to S (the groups' vectors are nested)
+                u = torch.matmul(cj[..., modes], self._buffer("pair", j, g).index_select(0, i0))
+                Sg = u.shape[-1] // 2
+                u = u[..., :Sg] + w.unsqueeze(-1) * (u[..., Sg:] - u[..., :Sg])
+                v = v + (torch.nn.functional.pad(u, (0, S - Sg)) if Sg < S else u)
+            # then one dense product by the spatial basis, shared by every row
             parts.append(torch.matmul(v.transpose(0, 1), self._buffer("psi", j)))
         return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
@@ -93,9 +102,13 @@ class BandDecoder(torch.nn.Module):
         """Normalised components (M, b, F, P, 6) at the band grid points ``index`` (F,)."""
         parts = []
         for j, rows in enumerate(self.rows):
-            v = self._buffer("mean", j)[index] + torch.einsum(
-                "mbk,fks->mbfs", y[..., 1:][..., rows], self._buffer("coef", j)[index])
-            parts.append(torch.matmul(v, self._buffer("psi", j)))
+            cj = y[..., 1:][..., rows]
+            z = torch.matmul(self._buffer("mean", j)[index], self._buffer("psi", j))
+            for g, modes in enumerate(self.groups[j]):
+                coef = self._buffer("coef", j, g)
+                v = torch.einsum("mbk,fks->mbfs", cj[..., modes], coef[index])
+                z = z + torch.matmul(v, self._buffer("psi", j)[:coef.shape[2]])
+            parts.append(z)
         return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
     def log_outputs(self, y: torch.Tensor, z: torch.Tensor) -> torch.Tensor:

@@ -318,6 +318,10 @@ class BandTargets:
                 "spatial_tol": self.spatial_tol,
                 "spatial_rank": dict(zip(("centre_edge", "profile"),
                                          (f.rank for f in self.factors), strict=True)),
+                "spatial_groups": dict(zip(("centre_edge", "profile"), (
+                    [{"modes": [g.start, g.stop], "rank": r}
+                     for g, r in zip(f.groups, f.ranks, strict=True)]
+                    for f in self.factors), strict=True)),
                 "spatial_rel_error": dict(zip(("centre_edge", "profile"),
                                               (f.rel_error for f in self.factors), strict=True)),
                 "location_weights": [float(v) for v in self.weights_]}

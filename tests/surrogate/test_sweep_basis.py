@@ -30,18 +30,20 @@ def test_at_full_rank_the_factored_basis_is_the_pod_basis(response):
     n_f, k, L = 5, 7, 9
     modes, mean = rng.standard_normal((n_f, k, L)), rng.standard_normal((n_f, L))
     weights = rng.uniform(0.5, 2.0, L)
-    fac = factor_block(modes, mean, rng.standard_normal((30, k)), weights, rank=L)
+    coefficients = rng.standard_normal((30, k))
+    fac = factor_block(modes, mean, coefficients - coefficients.mean(axis=0), weights,
+                       ranks=(L,))
     np.testing.assert_allclose(fac.modes(), modes * weights, atol=1e-12)
     np.testing.assert_allclose(fac.means(), mean * weights, atol=1e-12)
     assert fac.rel_error == pytest.approx(0.0, abs=1e-7)
     t = BandTargets(centre_modes=6, profile_modes=8, spatial_tol=0.0)
     t.fit_transform(response)
-    assert [f.rank for f in t.factors] == [12, 30]
+    assert [f.ranks for f in t.factors] == [(12,), (30,)]
     for got, want in zip(t.band_basis(), t.band_basis(exact=True), strict=True):
         np.testing.assert_allclose(got, want, atol=1e-12)
 
 
-def test_the_chosen_rank_is_the_smallest_within_the_tolerance(response):
+def test_the_chosen_ranks_are_within_the_tolerance_and_cheaper_than_one_rank(response):
     tol = 1e-3
     t = BandTargets(centre_modes=6, profile_modes=8, spatial_tol=tol)
     T = t.fit_transform(response)
@@ -53,9 +55,27 @@ def test_the_chosen_rank_is_the_smallest_within_the_tolerance(response):
             / np.linalg.norm(exact[:, :, loc])
         assert err <= tol
         assert err == pytest.approx(t.factors[j].rel_error, rel=1e-3, abs=1e-6)
-    assert tail_error(profile.spectrum)[profile.rank - 1] > tol   # one fewer is not enough
+    # one rank for every mode, the smallest within tol, gathers at least as much per row
+    one = int(np.argmax(tail_error(profile.spectrum) <= tol))
+    assert profile.row_work() <= 8 * one
     assert t.to_dict()["spatial_rank"] == {"centre_edge": t.factors[0].rank,
                                            "profile": profile.rank}
+
+
+def test_groups_of_modes_take_their_own_ranks_and_the_error_adds_up():
+    rng = np.random.default_rng(1)
+    n_f, k, L, n = 4, 40, 10, 200
+    modes = rng.standard_normal((n_f, k, L))
+    raw = rng.standard_normal((n, k))       # centred, orthogonal, decaying: as POD's are
+    coefficients = np.linalg.qr(raw - raw.mean(axis=0))[0] * np.geomspace(1.0, 1e-2, k)
+    fac = factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L), ranks=(9, 5, 2))
+    assert [(g.start, g.stop) for g in fac.groups] == [(0, 16), (16, 32), (32, 40)]
+    assert fac.ranks == (9, 5, 2) and fac.rank == 9 and fac.row_work() == 16 * 9 + 16 * 5 + 8 * 2
+    z = np.einsum("nk,fkl->nfl", coefficients, modes)
+    zf = np.einsum("nk,fkl->nfl", coefficients, fac.modes())
+    assert np.linalg.norm(zf - z) / np.linalg.norm(z) == pytest.approx(fac.rel_error, rel=1e-6)
+    assert factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L),
+                        ranks=(4, 4, 4)).groups == (slice(0, 40),)   # equal ranks merged
 
 
 def test_the_torch_decode_equals_the_numpy_basis_at_grid_points_and_between(response):
@@ -63,7 +83,7 @@ def test_the_torch_decode_equals_the_numpy_basis_at_grid_points_and_between(resp
     T = t.fit_transform(response[:6])
     y = np.stack([T, T + 0.01])                   # two "members" (M, n, 1 + k)
     decoder = BandDecoder(t)
-    ln_s, z = t.components(y)                     # (M, n, n_f, P, 6)
+    _, z = t.components(y)                        # (M, n, n_f, P, 6)
     yt = torch.as_tensor(y, dtype=torch.float32)
     index = torch.tensor([0, 3, 15])
     np.testing.assert_allclose(decoder.at_grid(yt, index).numpy(), z[:, :, index.numpy()],
@@ -77,6 +97,7 @@ def test_the_torch_decode_equals_the_numpy_basis_at_grid_points_and_between(resp
     np.testing.assert_allclose(got, want, atol=2e-5)
 
 
-def test_a_spatial_rank_out_of_range_is_refused():
-    with pytest.raises(ValueError, match="spatial rank 0: must be in 1..3"):
-        factor_block(np.ones((2, 2, 3)), np.ones((2, 3)), np.ones((4, 2)), np.ones(3), rank=0)
+def test_spatial_ranks_out_of_range_are_refused():
+    with pytest.raises(ValueError, match=r"spatial ranks \(0,\): need 1 ranks in 1..3"):
+        factor_block(np.ones((2, 2, 3)), np.ones((2, 3)), np.ones((4, 2)), np.ones(3),
+                     ranks=(0,))
