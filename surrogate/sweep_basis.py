@@ -37,6 +37,9 @@ __all__ = ["GROUP_EDGES", "SpatialFactor", "factor_block", "tail_error"]
 #: First mode of each group after the first (groups of 16, 16, 32, 64, 128, ... modes): the
 #: leading modes carry most of the energy and need the most spatial vectors.
 GROUP_EDGES = (16, 32, 64, 128, 256, 512, 1024)
+#: Numbers per row a group must save to stay apart from its neighbour (its own gather,
+#: product and padding cost about as much at batch 10,000; and some 20 us at batch 1)
+GROUP_OVERHEAD = 256
 
 
 @dataclass(frozen=True)
@@ -117,12 +120,13 @@ def _ranks(tails: np.ndarray, sizes: np.ndarray, budget: float) -> np.ndarray:
 
 def factor_block(modes: np.ndarray, mean: np.ndarray, coefficients: np.ndarray,
                  weights: np.ndarray, *, tol: float = 1e-3,
-                 ranks: tuple[int, ...] | None = None) -> SpatialFactor:
+                 ranks: tuple[int, ...] | None = None, merge: bool = True) -> SpatialFactor:
     """Factor one block: weighted ``modes`` (n_f, k, L), ``mean`` (n_f, L), the fitting
     designs' (centred) POD ``coefficients`` (n, k) and the per-value ``weights`` (L,) (a
     location's weight on each of its 6 parts). The ranks are ``ranks`` (one per group of
     :func:`mode_groups`) when given, else the cheapest with relative error <= ``tol``
-    (``tol`` 0: every S_g = L, exact)."""
+    (``tol`` 0: every S_g = L, exact); then adjacent groups merged (:func:`_merge`) unless
+    not ``merge``."""
     k, L = modes.shape[1:]
     n = coefficients.shape[0]
     energy = np.sum(np.square(coefficients), axis=0)                   # (k,)
@@ -146,9 +150,12 @@ def factor_block(modes: np.ndarray, mean: np.ndarray, coefficients: np.ndarray,
         ranks, mean_rank = tuple(int(r) for r in chosen[:-1]), int(chosen[-1])
     if len(ranks) != len(groups) or not all(1 <= r <= L for r in ranks):
         raise ValueError(f"spatial ranks {tuple(ranks)}: need {len(groups)} ranks in 1..{L}")
+    merged, ranks = _merge(groups, tuple(ranks)) if merge else (groups, tuple(ranks))
     S = max(*ranks, mean_rank)
-    err = mean_tail[S] + sum(tails[j, r] for j, r in enumerate(ranks))
-    groups, ranks = _merge(groups, tuple(ranks))
+    kept = [r for g, r in zip(merged, ranks, strict=True) for h in groups
+            if g.start <= h.start < g.stop]                   # each first group's rank now
+    err = mean_tail[S] + sum(tails[j, r] for j, r in enumerate(kept))
+    groups = merged
     return SpatialFactor(groups=groups,
                          coefs=tuple(rotated[:, g, :r] for g, r in zip(groups, ranks,
                                                                        strict=True)),
@@ -159,15 +166,20 @@ def factor_block(modes: np.ndarray, mean: np.ndarray, coefficients: np.ndarray,
 
 def _merge(groups: tuple[slice, ...], ranks: tuple[int, ...]
            ) -> tuple[tuple[slice, ...], tuple[int, ...]]:
-    """Adjacent groups of the same rank as one (fewer products in the graph)."""
-    out_groups, out_ranks = [groups[0]], [ranks[0]]
-    for g, r in zip(groups[1:], ranks[1:], strict=True):
-        if r == out_ranks[-1]:
-            out_groups[-1] = slice(out_groups[-1].start, g.stop)
-        else:
-            out_groups.append(g)
-            out_ranks.append(r)
-    return tuple(out_groups), tuple(out_ranks)
+    """Adjacent groups as one, at the larger rank (the error only falls), while a merge adds
+    at most :data:`GROUP_OVERHEAD` numbers to a row's gather: a group's own products cost
+    more than that (fewer, larger products in the graph)."""
+    groups, ranks = list(groups), list(ranks)
+    while len(groups) > 1:
+        extra = [(g0.stop - g0.start) * (max(r0, r1) - r0) + (g1.stop - g1.start)
+                 * (max(r0, r1) - r1) for g0, g1, r0, r1
+                 in zip(groups[:-1], groups[1:], ranks[:-1], ranks[1:], strict=True)]
+        i = int(np.argmin(extra))
+        if extra[i] > GROUP_OVERHEAD:
+            break
+        groups[i:i + 2] = [slice(groups[i].start, groups[i + 1].stop)]
+        ranks[i:i + 2] = [max(ranks[i], ranks[i + 1])]
+    return tuple(groups), tuple(ranks)
 
 
 def _tails(energy_per_vector: np.ndarray) -> np.ndarray:

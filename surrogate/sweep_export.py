@@ -61,12 +61,12 @@ class BandDecoder(torch.nn.Module):
         for j, fac in enumerate(targets.factors):
             self.groups.append(list(fac.groups))
             for g, coef in enumerate(fac.coefs):
-                # grid points i and i + 1 side by side, so a row gathers once:
-                # (n_f - 1, k_g, 2 S_g)
-                pair = np.concatenate([coef[:-1], coef[1:]], axis=-1)
+                # grid points i and i + 1 stacked along the modes, so that one product by the
+                # coefficients weighted [(1 - w) c, w c] interpolates: (n_f - 1, 2 k_g, S_g)
+                pair = np.concatenate([coef[:-1], coef[1:]], axis=1)
                 self.register_buffer(f"coef{j}_{g}", torch.as_tensor(coef, dtype=f32))
                 self.register_buffer(f"pair{j}_{g}", torch.as_tensor(pair, dtype=f32))
-            pair_mean = np.concatenate([fac.mean[:-1], fac.mean[1:]], axis=-1)
+            pair_mean = np.stack([fac.mean[:-1], fac.mean[1:]], axis=1)  # (n_f - 1, 2, S)
             self.register_buffer(f"mean{j}", torch.as_tensor(fac.mean, dtype=f32))
             self.register_buffer(f"pair_mean{j}", torch.as_tensor(pair_mean, dtype=f32))
             self.register_buffer(f"psi{j}", torch.as_tensor(fac.psi, dtype=f32))  # (S, L_j)
@@ -78,22 +78,24 @@ class BandDecoder(torch.nn.Module):
         """Normalised components (M, b, P, 6) at fractional band indices ``t`` (b,)."""
         t = t.clamp(0.0, float(self.n_f - 1))
         i0 = t.floor().clamp(max=float(self.n_f - 2))
-        w = (t - i0).unsqueeze(-1)                                     # (b, 1)
+        w = (t - i0).unsqueeze(-1)
+        weights = torch.cat([1.0 - w, w], dim=-1).unsqueeze(-1)       # (b, 2, 1)
         i0 = i0.long()
-        c = y[..., 1:].transpose(0, 1)                                 # (b, M, k)
+        # the coefficients weighted for grid points i and i + 1: (b, M, 2, k)
+        cw = y[..., 1:].transpose(0, 1).unsqueeze(2) * weights.unsqueeze(1)
         parts = []
         for j, rows in enumerate(self.rows):
-            cj = c[..., rows]
-            mean = self._buffer("pair_mean", j).index_select(0, i0)    # (b, 2 S)
-            S = mean.shape[-1] // 2
-            v = (mean[:, :S] + w * (mean[:, S:] - mean[:, :S])).unsqueeze(1)
+            v = (self._buffer("pair_mean", j).index_select(0, i0) * weights).sum(1)
+            v = v.unsqueeze(1)                                         # (b, 1, S)
+            S = v.shape[-1]
             for g, modes in enumerate(self.groups[j]):
-                # one (M x k_g) @ (k_g x 2 S_g) product per row: both grid points' spatial
-                # coordinates, interpolated, padded to S (the groups' vectors are nested)
-                u = torch.matmul(cj[..., modes], self._buffer("pair", j, g).index_select(0, i0))
-                Sg = u.shape[-1] // 2
-                u = u[..., :Sg] + w.unsqueeze(-1) * (u[..., Sg:] - u[..., :Sg])
-                v = v + (torch.nn.functional.pad(u, (0, S - Sg)) if Sg < S else u)
+                # one (M x 2 k_g) @ (2 k_g x S_g) product per row: both grid points and the
+                # interpolation; padded to S (the groups' spatial vectors are nested)
+                m = slice(rows.start + modes.start, rows.start + modes.stop)
+                u = torch.matmul(cw[..., m].flatten(-2),
+                                 self._buffer("pair", j, g).index_select(0, i0))
+                v = v + (torch.nn.functional.pad(u, (0, S - u.shape[-1]))
+                         if u.shape[-1] < S else u)
             # then one dense product by the spatial basis, shared by every row
             parts.append(torch.matmul(v.transpose(0, 1), self._buffer("psi", j)))
         return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))

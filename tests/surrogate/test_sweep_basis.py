@@ -68,14 +68,20 @@ def test_groups_of_modes_take_their_own_ranks_and_the_error_adds_up():
     modes = rng.standard_normal((n_f, k, L))
     raw = rng.standard_normal((n, k))       # centred, orthogonal, decaying: as POD's are
     coefficients = np.linalg.qr(raw - raw.mean(axis=0))[0] * np.geomspace(1.0, 1e-2, k)
-    fac = factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L), ranks=(9, 5, 2))
+    fac = factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L), ranks=(9, 5, 2),
+                       merge=False)
     assert [(g.start, g.stop) for g in fac.groups] == [(0, 16), (16, 32), (32, 40)]
     assert fac.ranks == (9, 5, 2) and fac.rank == 9 and fac.row_work() == 16 * 9 + 16 * 5 + 8 * 2
     z = np.einsum("nk,fkl->nfl", coefficients, modes)
     zf = np.einsum("nk,fkl->nfl", coefficients, fac.modes())
     assert np.linalg.norm(zf - z) / np.linalg.norm(z) == pytest.approx(fac.rel_error, rel=1e-6)
-    assert factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L),
-                        ranks=(4, 4, 4)).groups == (slice(0, 40),)   # equal ranks merged
+    # merged where a group would save fewer than GROUP_OVERHEAD numbers per row
+    merged = factor_block(modes, np.zeros((n_f, L)), coefficients, np.ones(L), ranks=(9, 5, 2))
+    assert merged.groups == (slice(0, 40),) and merged.ranks == (9,)
+    assert merged.rel_error <= fac.rel_error
+    wide = factor_block(np.tile(modes, (1, 5, 1)), np.zeros((n_f, L)),
+                        np.tile(coefficients, 5) / 5, np.ones(L), ranks=(9, 9, 9, 9, 1))
+    assert wide.ranks == (9, 1) and wide.groups == (slice(0, 128), slice(128, 200))
 
 
 def test_the_torch_decode_equals_the_numpy_basis_at_grid_points_and_between(response):
