@@ -212,9 +212,9 @@ def bench_predictor(label: str, p: Any, graph: bytes, rounds: int, batch: int
     rate = dense * batch / dense_s
     bound = flops * batch / rate
     largest = sorted(per_node, key=lambda v: -v[1])[:3]
-    print(f" FLOPs per row (every MatMul/Gemm, as run): {flops / 1e3:.1f} k, of which "
-          f"{(flops - dense) / 1e3:.1f} k outside the dense initializer matmuls (largest "
-          f"products: {', '.join(f'{n} {f / 1e3:.1f} k' for n, f in largest)})")
+    print(f" FLOPs per row (every MatMul/Gemm, as run): {flops / 1e3:.1f} k (2 x prod(W) over "
+          f"the initializer matmuls W: {dense / 1e3:.1f} k; largest products: "
+          f"{', '.join(f'{n} {f / 1e3:.1f} k' for n, f in largest)})")
     print(f" FLOP-bound at batch {batch:,}: {bound * 1e3:.1f} ms (numpy: "
           f"{rate / 1e9:.1f} GFLOP/s on the graph's dense matmuls, one thread)")
     cpu = {k: statistics.median(b[0] for b in v) for k, v in resb.items()}

@@ -6,17 +6,19 @@ frequency -> ln magnitudes, exported as the one graph contract of :mod:`surrogat
       -> t = (f - f_0) / step from the frequency's feature, clamped to [0, n_f - 1];
          i = min(floor(t), n_f - 2), w = t - i
       -> per POD block j (centre + edge; the profile beyond the edge), with the block's
-         factored basis modes_j[f] = A_j[f] @ Psi_j (:mod:`surrogate.sweep_basis`):
-         v = a_j[t] + y_j @ A_j[t] at the band's grid points i and i + 1 (one gather of
-         both, k_j x 2 S_j per row), linearly interpolated with the weight w, then
-         z_j = v @ Psi_j (one dense product shared by every row)  (members, batch, P, 6)
+         factored basis (:mod:`surrogate.sweep_basis`: per group g of its modes
+         modes[f][g] = A_g[f] @ Psi[:S_g], mean[f] = a[f] @ Psi):
+         v = sum_g [(1 - w) y_g, w y_g] @ [A_g[i]; A_g[i + 1]] (one gather of both grid
+         points, 2 k_g x S_g per row, and the interpolation inside the product, padded to S)
+         + the interpolated mean's coordinates, then z_j = v @ Psi (one dense product shared
+         by every row)                                              (members, batch, P, 6)
       -> ln |u| = ln s + 0.5 ln(sum of squares of the six parts)   (members, batch, P)
       -> log outputs [centre, edge, edge / centre, profile, (normal profile)]
       -> log_mean, log_std: their mean and (population) std over the members.
 
-Per row the decode gathers k_j x 2 S_j numbers of each block (not the band's k x P * 6 modes
-at two grid points, with the zeros off the blocks) and does 2 M (2 k_j S_j + S_j L_j)
-multiply-adds' worth of FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
+Per row the decode gathers sum_g 2 k_g S_g numbers of each block (not the band's k x P * 6
+modes at two grid points, with the zeros off the blocks) and does 2 M (sum_g 2 k_g S_g + S L_j)
+FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
 members' target scaling is folded into their last layer. Psi carries the per-location
 weights of :class:`surrogate.sweep_targets.BandTargets`, so the graph needs nothing outside
 it. :func:`reference_log_outputs` is the graph-free numpy version (through the same factored
