@@ -2,6 +2,7 @@
 run-time path (validation, encoding, decoding), at batch 1 and batch 10,000, on shipped models.
 
     .venv/bin/python bench/bench_predict.py [--models nn-default gp-default] [--rounds 15]
+    .venv/bin/python bench/bench_predict.py --models nn-default MODEL_DIR --chunk-rows 512,1024
 
 For each model (one thread: the predictor's own session, OMP/BLAS threads set to 1):
 
@@ -233,14 +234,42 @@ def bench(name: str, rounds: int, batch: int) -> dict[str, float]:
     return bench_predictor(name, p, graph, rounds, batch)
 
 
+def chunk_rows(name: str, sizes: list[int], rounds: int, batch: int) -> None:
+    """``Predictor.predict`` of ``batch`` designs (dict) with each chunk size
+    (``surrogate.runtime.predictor.CHUNK_ROWS``), interleaved: medians of thread CPU time."""
+    import surrogate.runtime.predictor as predictor_module
+
+    p = load_model(name)
+    many = designs(p.card, batch)
+    default = predictor_module.CHUNK_ROWS
+    times: dict[int, list[float]] = {n: [] for n in sizes}
+    try:
+        for _ in range(rounds):
+            for n in sizes:
+                predictor_module.CHUNK_ROWS = n
+                t0 = time.thread_time()
+                p.predict(many)
+                times[n].append(time.thread_time() - t0)
+    finally:
+        predictor_module.CHUNK_ROWS = default
+    print(f"\n{name}: predict(dict) of {batch:,} designs by chunk rows: "
+          + ", ".join(f"{n}: {statistics.median(v) * 1e3:.0f} ms" for n, v in times.items()))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--models", nargs="+", default=["nn-default", "gp-default"])
     ap.add_argument("--rounds", type=int, default=15)
     ap.add_argument("--batch", type=int, default=10_000)
+    ap.add_argument("--chunk-rows", help="instead: time predict at --batch with these "
+                    "CHUNK_ROWS values, e.g. 256,512,1024")
     args = ap.parse_args()
     for name in args.models:
-        bench(name, args.rounds, args.batch)
+        if args.chunk_rows:
+            chunk_rows(name, [int(v) for v in args.chunk_rows.split(",")], args.rounds,
+                       args.batch)
+        else:
+            bench(name, args.rounds, args.batch)
 
 
 if __name__ == "__main__":
