@@ -3,12 +3,13 @@ the raw onnxruntime call, and batch 10,000 against the FLOP-bound time, for the 
 and after the factored decode, on the SAME members; and the factored basis's floor.
 
     .venv/bin/python bench/bench_sweep_predict.py --data SWEEP_DIR [--test-data TEST_DIR] \\
-        [--options '{"max_epochs": 20, "loss": "coefficients"}'] [--before 266242a] \\
-        [--models nn-default MODEL_DIR ...] [--rounds 15] [--batch 10000]
+        [--options '{"max_epochs": 20, "loss": "coefficients"}'] [--test-fraction 0.2] \\
+        [--before 266242a] [--models nn-default MODEL_DIR ...] [--rounds 15] [--batch 10000]
 
 * One ensemble is fitted (``surrogate.sweep_train.fit_sweep``, ``--options``; the timing does
   not depend on its accuracy, only on its sizes: 256 x 256 x 5 members and the basis by
-  default) on the training designs of ``--data`` (the split ``hapticrom train`` makes, seed 0).
+  default) on the training designs of ``--data`` (the split ``hapticrom train`` makes, seed 0,
+  ``--test-fraction``).
 * "before": its graph exported by ``surrogate/sweep_export.py`` as of git revision
   ``--before`` (read with ``git show``; that decode gathers the whole (k, P * 6) basis with
   its zero blocks at two grid points per row, from the PODs' exact basis); "after": by the
@@ -96,24 +97,29 @@ def parity(predictor: Predictor, targets: Any, est: Any, data: SweepData,
 
 
 def floor(targets: BandTargets, response: np.ndarray) -> dict[str, np.ndarray]:
-    """|d ln| [ln] quantiles (:data:`QUANTILES`) of centre, edge and profile between true
-    magnitudes and those rebuilt from the true targets, exactly and factored."""
+    """|d ln u| [ln] quantiles (:data:`QUANTILES`) of centre, edge and profile between true
+    magnitudes and those rebuilt from the true targets through the PODs' exact basis and
+    through the factored one, and between the two rebuilds (the factorisation's own part)."""
     truth = log_magnitudes(response)                                 # (n, n_f, P)
     T = targets.transform(response)
-    out = {}
-    for label, exact in (("POD basis (before)", True), ("factored (after)", False)):
+    rebuilt = {}
+    for exact in (True, False):
         ln_s, z = targets.components(T, exact=exact)
-        err = np.abs(log_magnitudes(z, ln_s[:, None]) - truth)
+        rebuilt[exact] = log_magnitudes(z, ln_s[:, None])
+    out = {}
+    for label, err in (("POD basis vs truth (before)", rebuilt[True] - truth),
+                       ("factored vs truth (after)", rebuilt[False] - truth),
+                       ("factored vs POD basis", rebuilt[False] - rebuilt[True])):
         for part, cols in (("centre", slice(0, 1)), ("edge", slice(1, 2)),
                            ("profile", slice(1, None))):
-            out[f"{label} {part}"] = np.percentile(err[..., cols], QUANTILES)
+            out[f"{label}, {part}"] = np.percentile(np.abs(err[..., cols]), QUANTILES)
     return out
 
 
 def print_floor(title: str, table: dict[str, np.ndarray]) -> None:
     print(f"\n{title}: |d ln u| from the basis alone, median / p95 / p99 / max")
     for name, q in table.items():
-        print(f"  {name:28s} " + " / ".join(f"{v:.2e}" for v in q))
+        print(f"  {name:38s} " + " / ".join(f"{v:.2e}" for v in q))
 
 
 def main() -> None:
@@ -122,6 +128,8 @@ def main() -> None:
     ap.add_argument("--test-data", help="another sweep dataset of the space (the floor)")
     ap.add_argument("--options", default='{"max_epochs": 20, "loss": "coefficients"}',
                     help="fit_sweep options (JSON)")
+    ap.add_argument("--test-fraction", type=float, default=0.2,
+                    help="designs held out of the fit (the split of hapticrom train)")
     ap.add_argument("--before", default="266242a", help="git revision of the old decode")
     ap.add_argument("--models", nargs="*", default=["nn-default"])
     ap.add_argument("--rounds", type=int, default=15)
@@ -129,7 +137,7 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(1)
     data = load_sweep_datasets([args.data])
-    tr, te = split(len(data.codes), 0.2, 0)
+    tr, te = split(len(data.codes), args.test_fraction, 0)
     est, targets = fit_sweep(data, tr, options=json.loads(args.options))
     rep = targets.to_dict()
     print(f"{len(data.codes)} designs ({tr.size} fit, {te.size} held out); POD modes "
