@@ -5,16 +5,24 @@ frequency -> ln magnitudes, exported as the one graph contract of :mod:`surrogat
       -> each member's targets y = [ln s, POD coefficients]       (members, batch, 1 + k)
       -> t = (f - f_0) / step from the frequency's feature, clamped to [0, n_f - 1];
          i = min(floor(t), n_f - 2), w = t - i
-      -> normalised components z = mean_t + y[1:] @ modes_t at the band's grid points i and
-         i + 1, linearly interpolated with the weight w            (members, batch, P, 6)
+      -> per POD block j (centre + edge; the profile beyond the edge), with the block's
+         factored basis (:mod:`surrogate.sweep_basis`: per group g of its modes
+         modes[f][g] = A_g[f] @ Psi[:S_g], mean[f] = a[f] @ Psi):
+         v = sum_g [(1 - w) y_g, w y_g] @ [A_g[i]; A_g[i + 1]] (one gather of both grid
+         points, 2 k_g x S_g per row, and the interpolation inside the product, padded to S)
+         + the interpolated mean's coordinates, then z_j = v @ Psi (one dense product shared
+         by every row)                                              (members, batch, P, 6)
       -> ln |u| = ln s + 0.5 ln(sum of squares of the six parts)   (members, batch, P)
       -> log outputs [centre, edge, edge / centre, profile, (normal profile)]
       -> log_mean, log_std: their mean and (population) std over the members.
 
-Rebuilding two grid points per row rather than the whole band costs 2 / n_f of it. The modes
-and the means carry the per-location weights of :class:`surrogate.sweep_targets.BandTargets`,
-so the graph needs nothing outside it. :func:`reference_log_outputs` is the graph-free numpy version
-(training checks the exported graph against it).
+Per row the decode gathers sum_g 2 k_g S_g numbers of each block (not the band's k x P * 6
+modes at two grid points, with the zeros off the blocks) and does 2 M (sum_g 2 k_g S_g + S L_j)
+FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
+members' target scaling is folded into their last layer. Psi carries the per-location
+weights of :class:`surrogate.sweep_targets.BandTargets`, so the graph needs nothing outside
+it. :func:`reference_log_outputs` is the graph-free numpy version (through the same factored
+basis; training checks the exported graph against it).
 """
 
 from __future__ import annotations
@@ -26,7 +34,7 @@ import numpy as np
 import torch
 
 from surrogate.export import export_module
-from surrogate.nn import MLPEnsembleRegressor
+from surrogate.nn import EnsembleModule, MLPEnsembleRegressor
 from surrogate.sweep_targets import (
     TINY,
     BandTargets,
@@ -37,43 +45,75 @@ from surrogate.sweep_targets import (
 )
 
 __all__ = ["BandDecoder", "SweepEnsembleModule", "export_sweep_nn", "magnitude_error",
-           "member_targets",
-           "reference_log_outputs"]
+           "member_targets", "reference_log_outputs", "target_module"]
 
 
 class BandDecoder(torch.nn.Module):
     """Member targets (M, b, 1 + k) and a fractional band index t (b,) -> log outputs
-    (M, b, 3 + m [+ m]) (``normal``: with the ln |u_z| profile block)."""
+    (M, b, 3 + m [+ m]) (``normal``: with the ln |u_z| profile block), through the factored
+    basis of each block (:attr:`surrogate.sweep_targets.BandTargets.factors`)."""
 
     def __init__(self, targets: BandTargets, normal: bool = False) -> None:
         super().__init__()
-        modes, mean = targets.band_basis()
         f32 = torch.float32
-        self.register_buffer("modes", torch.as_tensor(modes, dtype=f32))   # (n_f, k, L)
-        self.register_buffer("mean", torch.as_tensor(mean, dtype=f32))     # (n_f, L)
         self.n_f, self.P = targets.shape_
         self.normal = normal
+        self.rows = targets.block_modes()
+        self.groups: list[list[slice]] = []
+        for j, fac in enumerate(targets.factors):
+            self.groups.append(list(fac.groups))
+            for g, coef in enumerate(fac.coefs):
+                # grid points i and i + 1 stacked along the modes, so that one product by the
+                # coefficients weighted [(1 - w) c, w c] interpolates: (n_f - 1, 2 k_g, S_g)
+                pair = np.concatenate([coef[:-1], coef[1:]], axis=1)
+                self.register_buffer(f"coef{j}_{g}", torch.as_tensor(coef, dtype=f32))
+                self.register_buffer(f"pair{j}_{g}", torch.as_tensor(pair, dtype=f32))
+            pair_mean = np.stack([fac.mean[:-1], fac.mean[1:]], axis=1)  # (n_f - 1, 2, S)
+            self.register_buffer(f"mean{j}", torch.as_tensor(fac.mean, dtype=f32))
+            self.register_buffer(f"pair_mean{j}", torch.as_tensor(pair_mean, dtype=f32))
+            self.register_buffer(f"psi{j}", torch.as_tensor(fac.psi, dtype=f32))  # (S, L_j)
+
+    def _buffer(self, name: str, *index: int) -> torch.Tensor:
+        return getattr(self, name + "_".join(str(i) for i in index))
 
     def components(self, y: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, P, 6) at fractional band indices ``t`` (b,)."""
         t = t.clamp(0.0, float(self.n_f - 1))
         i0 = t.floor().clamp(max=float(self.n_f - 2))
         w = (t - i0).unsqueeze(-1)
+        weights = torch.cat([1.0 - w, w], dim=-1).unsqueeze(-1)       # (b, 2, 1)
         i0 = i0.long()
-        c = y[..., 1:].transpose(0, 1)                                 # (b, M, k)
-        # one (M x k) @ (k x L) product per row and grid point, then the weights: the same
-        # arithmetic as interpolating the basis, without a (b, k, L) interpolated copy
-        z0 = torch.matmul(c, self.modes.index_select(0, i0)) \
-            + self.mean.index_select(0, i0).unsqueeze(1)               # (b, M, L)
-        z1 = torch.matmul(c, self.modes.index_select(0, i0 + 1)) \
-            + self.mean.index_select(0, i0 + 1).unsqueeze(1)
-        z = z0 + w.unsqueeze(-1) * (z1 - z0)
-        return z.transpose(0, 1).unflatten(-1, (self.P, 6))
+        # the coefficients weighted for grid points i and i + 1: (b, M, 2, k)
+        cw = y[..., 1:].transpose(0, 1).unsqueeze(2) * weights.unsqueeze(1)
+        parts = []
+        for j, rows in enumerate(self.rows):
+            v = (self._buffer("pair_mean", j).index_select(0, i0) * weights).sum(1)
+            v = v.unsqueeze(1)                                         # (b, 1, S)
+            S = v.shape[-1]
+            for g, modes in enumerate(self.groups[j]):
+                # one (M x 2 k_g) @ (2 k_g x S_g) product per row: both grid points and the
+                # interpolation; padded to S (the groups' spatial vectors are nested)
+                m = slice(rows.start + modes.start, rows.start + modes.stop)
+                u = torch.matmul(cw[..., m].flatten(-2),
+                                 self._buffer("pair", j, g).index_select(0, i0))
+                v = v + (torch.nn.functional.pad(u, (0, S - u.shape[-1]))
+                         if u.shape[-1] < S else u)
+            # then one dense product by the spatial basis, shared by every row
+            parts.append(torch.matmul(v.transpose(0, 1), self._buffer("psi", j)))
+        return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
     def at_grid(self, y: torch.Tensor, index: torch.Tensor) -> torch.Tensor:
         """Normalised components (M, b, F, P, 6) at the band grid points ``index`` (F,)."""
-        z = self.mean[index] + torch.einsum("mbk,fkl->mbfl", y[..., 1:], self.modes[index])
-        return z.unflatten(-1, (self.P, 6))
+        parts = []
+        for j, rows in enumerate(self.rows):
+            cj = y[..., 1:][..., rows]
+            z = torch.matmul(self._buffer("mean", j)[index], self._buffer("psi", j))
+            for g, modes in enumerate(self.groups[j]):
+                coef = self._buffer("coef", j, g)
+                v = torch.einsum("mbk,fks->mbfs", cj[..., modes], coef[index])
+                z = z + torch.matmul(v, self._buffer("psi", j)[:coef.shape[2]])
+            parts.append(z)
+        return torch.cat(parts, dim=-1).unflatten(-1, (self.P, 6))
 
     def log_outputs(self, y: torch.Tensor, z: torch.Tensor) -> torch.Tensor:
         """Log outputs of components ``z`` (M, b, [F,] P, 6) and targets ``y`` (M, b, 1 + k)."""
@@ -96,7 +136,7 @@ class SweepEnsembleModule(torch.nn.Module):
     def __init__(self, estimator: MLPEnsembleRegressor, decoder: BandDecoder,
                  frequency_low: float, frequency_high: float, band_hz: np.ndarray) -> None:
         super().__init__()
-        self.ensemble = estimator.to_module()
+        self.ensemble = target_module(estimator)
         self.decoder = decoder
         self.d = int(estimator.n_features_in_)
         step = float(band_hz[1] - band_hz[0])
@@ -105,20 +145,30 @@ class SweepEnsembleModule(torch.nn.Module):
         self.t_offset = float((frequency_low - band_hz[0]) / step)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        y = torch.matmul(self.ensemble.members(x[:, :self.d]), self.ensemble.B) \
-            + self.ensemble.b
+        y = self.ensemble.members(x[:, :self.d])
         out = self.decoder(y, x[:, self.d] * self.t_scale + self.t_offset)
         mean = out.mean(dim=0)
         std = ((out - mean) ** 2).mean(dim=0).sqrt()
         return mean, std
 
 
+def target_module(estimator: MLPEnsembleRegressor) -> EnsembleModule:
+    """The members as a torch module whose ``members(x)`` are the targets themselves: the
+    estimator's target scaling (a diagonal map) folded into the last layer, so the graph
+    does no (k x k) product by it."""
+    module = estimator.to_module()
+    scale = torch.as_tensor(estimator.y_scale_, dtype=torch.float32)
+    with torch.no_grad():
+        module.weights[-1].mul_(scale)
+        module.biases[-1].mul_(scale).add_(torch.as_tensor(estimator.y_mean_,
+                                                           dtype=torch.float32))
+    return module
+
+
 def member_targets(estimator: MLPEnsembleRegressor, X: np.ndarray) -> np.ndarray:
     """Every member's targets (members, n, 1 + k) for design features ``X`` (float64)."""
-    module = estimator.to_module()
     with torch.no_grad():
-        x = torch.as_tensor(X, dtype=torch.float32)
-        y = torch.matmul(module.members(x), module.B) + module.b
+        y = target_module(estimator).members(torch.as_tensor(X, dtype=torch.float32))
     return y.double().numpy()
 
 

@@ -26,6 +26,7 @@ last axis (r re, r im, z re, z im, t re, t im) -- :data:`surrogate.data.columns.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,7 @@ from surrogate.features import codes_from_frame, input_specs
 from surrogate.pod import POD
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.encoding import InputSpec
+from surrogate.sweep_basis import factor_block
 from surrogate.train import _edge_radius, _merge_specs
 
 __all__ = ["FREQUENCY_INPUT", "BandTargets", "SweepData", "check_not_mixed", "frequency_spec",
@@ -190,13 +192,20 @@ class BandTargets:
 
     Two blocks, each with its own POD of the flattened (n_f * locations * 6) band: the centre
     and the edge (``centre_modes``: they are few numbers and need few modes), and the profile
-    beyond the edge (``profile_modes``: the wave pattern over 40 mm needs many more).
+    beyond the edge (``profile_modes``: the wave pattern over 40 mm needs many more). Each
+    block's basis is then factored through a spatial basis shared by the band's frequencies
+    (:mod:`surrogate.sweep_basis`, relative error of the weighted components on the fitting
+    designs at most ``spatial_tol``; 0 keeps every spatial vector: exact), and the factored
+    basis is the model's: :meth:`components` and the graph rebuild through it.
     Fitted: ``weights_`` (P,) per-location weights, ``pods`` (two
-    :class:`surrogate.pod.POD`), ``shape_`` (n_f, P)."""
+    :class:`surrogate.pod.POD`), ``factors`` (two :class:`surrogate.sweep_basis.SpatialFactor`),
+    ``shape_`` (n_f, P)."""
 
-    def __init__(self, centre_modes: int = 48, profile_modes: int = 128) -> None:
+    def __init__(self, centre_modes: int = 48, profile_modes: int = 128,
+                 spatial_tol: float = 1e-3) -> None:
         self.centre_modes = centre_modes
         self.profile_modes = profile_modes
+        self.spatial_tol = spatial_tol
 
     def fit_transform(self, response: np.ndarray) -> np.ndarray:
         """Fit on (n, n_f, P, 6) responses [um]; return the (n, 1 + k) targets."""
@@ -211,9 +220,12 @@ class BandTargets:
         self.pods = [POD(n_modes=max(1, min(k, limit, n_f * len(loc) * 6)))
                      for k, loc in zip((self.centre_modes, self.profile_modes), self._blocks(),
                                        strict=True)]
-        blocks = self._flat(z)
-        return np.column_stack([ln_s, *(pod.fit_transform(b)
-                                        for pod, b in zip(self.pods, blocks, strict=True))])
+        coefficients = [pod.fit_transform(b) for pod, b in zip(self.pods, self._flat(z),
+                                                                   strict=True)]
+        self.factors = [factor_block(*self._block_basis(j), c, self._block_weights(j),
+                                     tol=self.spatial_tol)
+                        for j, c in enumerate(coefficients)]
+        return np.column_stack([ln_s, *coefficients])
 
     def transform(self, response: np.ndarray) -> np.ndarray:
         """The targets of (n, n_f, P, 6) responses with the fitted basis."""
@@ -243,26 +255,50 @@ class BandTargets:
         """Coefficients of both blocks."""
         return sum(int(pod.modes_.shape[0]) for pod in self.pods)
 
-    def band_basis(self) -> tuple[np.ndarray, np.ndarray]:
+    def block_values(self) -> list[slice]:
+        """Per block, its values in a location-major flattened (P * 6) row."""
+        return [slice(6 * loc[0], 6 * (loc[-1] + 1)) for loc in self._blocks()]
+
+    def block_modes(self) -> list[slice]:
+        """Per block, its coefficients in a (k,) coefficient row (the targets without ln s)."""
+        sizes = np.cumsum([0, *(int(pod.modes_.shape[0]) for pod in self.pods)])
+        return [slice(int(a), int(b)) for a, b in itertools.pairwise(sizes)]
+
+    def _block_basis(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Block ``j``'s POD as (modes (n_f, k_j, L_j), mean (n_f, L_j)), weighted space."""
+        n_f, pod = self.shape_[0], self.pods[j]
+        k = pod.modes_.shape[0]
+        return (pod.modes_.reshape(k, n_f, -1).transpose(1, 0, 2),
+                pod.mean_.reshape(n_f, -1))
+
+    def _block_weights(self, j: int) -> np.ndarray:
+        """Block ``j``'s location weights, one per value (L_j,)."""
+        return np.repeat(self.weights_[self._blocks()[j]], 6)
+
+    def band_basis(self, exact: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """(modes (n_f, k, P * 6), mean (n_f, P * 6)): normalised components at band
         frequency i = mean[i] + coefficients @ modes[i] (block-diagonal; the location weights
-        folded in)."""
+        folded in). The factored basis (the model's) unless ``exact``: then the PODs'."""
         n_f, P = self.shape_
-        modes = np.zeros((n_f, self.n_modes, P, 6))
-        mean = np.zeros((n_f, P, 6))
-        r = 0
-        for pod, loc in zip(self.pods, self._blocks(), strict=True):
-            k, w = pod.modes_.shape[0], self.weights_[loc][None, :, None]
-            modes[:, r:r + k, loc] = (pod.modes_.reshape(k, n_f, len(loc), 6) * w[None]
-                                      ).transpose(1, 0, 2, 3)
-            mean[:, loc] = pod.mean_.reshape(n_f, len(loc), 6) * w
-            r += k
-        return modes.reshape(n_f, self.n_modes, P * 6), mean.reshape(n_f, P * 6)
+        modes = np.zeros((n_f, self.n_modes, P * 6))
+        mean = np.zeros((n_f, P * 6))
+        for j, (rows, cols) in enumerate(zip(self.block_modes(), self.block_values(),
+                                             strict=True)):
+            if exact:
+                m, a = self._block_basis(j)
+                w = self._block_weights(j)
+                m, a = m * w, a * w
+            else:
+                m, a = self.factors[j].modes(), self.factors[j].means()
+            modes[:, rows, cols], mean[:, cols] = m, a
+        return modes, mean
 
-    def components(self, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(ln s (...,), normalised components (..., n_f, P, 6)) of targets (..., 1 + k)."""
+    def components(self, targets: np.ndarray, exact: bool = False
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """(ln s (...,), normalised components (..., n_f, P, 6)) of targets (..., 1 + k),
+        through the factored basis unless ``exact`` (:meth:`band_basis`)."""
         n_f, P = self.shape_
-        modes, mean = self.band_basis()
+        modes, mean = self.band_basis(exact)
         z = mean + np.einsum("...k,fkl->...fl", targets[..., 1:], modes)
         return targets[..., 0], z.reshape(*targets.shape[:-1], n_f, P, 6)
 
@@ -279,6 +315,15 @@ class BandTargets:
                               "profile": int(self.pods[1].modes_.shape[0])},
                 "pod_energy": {"centre_edge": float(self.pods[0].energy_[-1]),
                                "profile": float(self.pods[1].energy_[-1])},
+                "spatial_tol": self.spatial_tol,
+                "spatial_rank": dict(zip(("centre_edge", "profile"),
+                                         (f.rank for f in self.factors), strict=True)),
+                "spatial_groups": dict(zip(("centre_edge", "profile"), (
+                    [{"modes": [g.start, g.stop], "rank": r}
+                     for g, r in zip(f.groups, f.ranks, strict=True)]
+                    for f in self.factors), strict=True)),
+                "spatial_rel_error": dict(zip(("centre_edge", "profile"),
+                                              (f.rel_error for f in self.factors), strict=True)),
                 "location_weights": [float(v) for v in self.weights_]}
 
 

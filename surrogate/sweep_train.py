@@ -17,7 +17,9 @@ as they use a single-frequency model.
   ``refit_patience`` (default 40), ``refit_learning_rate`` (default 1e-3) and
   ``centre_weight`` (default 6: the centre's squared ln error counts six times the edge's
   and six times the whole profile's; docs/sweep-models.md has the measurement) drive the
-  second stage; every other option is the estimator's (``hidden`` defaults to 256 x 256 here).
+  second stage; ``spatial_tol`` (default 1e-3) bounds the relative error of the factored
+  basis the graph decodes through (:mod:`surrogate.sweep_basis`; 0: exact); every other
+  option is the estimator's (``hidden`` defaults to 256 x 256 here).
 * The card's metrics and interval calibration are computed on (design, band frequency) pairs
   *through the exported graph and the run-time encoder*, as for single-frequency models
   (:func:`surrogate.train.evaluate`, :mod:`surrogate.intervals`), plus the tails (p99, max,
@@ -64,7 +66,8 @@ LOSSES = ("magnitude", "coefficients")
 #: outputs (the single-frequency NN's tolerance; measured 2e-6 on default-sweep)
 PARITY_TOL = 1e-4
 _SWEEP_OPTIONS = {"loss": "magnitude", "centre_modes": 48, "refit_epochs": 400,
-                  "refit_patience": 40, "refit_learning_rate": 1e-3, "centre_weight": 6.0}
+                  "refit_patience": 40, "refit_learning_rate": 1e-3, "centre_weight": 6.0,
+                  "spatial_tol": 1e-3}
 #: The estimator's defaults for sweep data where they differ from the single-frequency NN's
 #: (bench/bench_sweep_nn.py on 1,248 designs, held-out centre / edge p95: 15 / 13 % with
 #: 256 x 256 and the default refit, 19 / 17 % with 128 x 128 and 150 refit epochs at 3e-4)
@@ -82,6 +85,7 @@ def _split_options(options: dict[str, Any]) -> tuple[dict[str, Any], dict[str, A
     check_number("refit_patience", ours["refit_patience"], 1, 10**6, integer=True)
     check_number("refit_learning_rate", ours["refit_learning_rate"], 0, 1, low_open=True)
     check_number("centre_weight", ours["centre_weight"], 0, 100, low_open=True)
+    check_number("spatial_tol", ours["spatial_tol"], 0, 0.5)
     return ours, {**_ESTIMATOR_DEFAULTS, **options}
 
 
@@ -141,7 +145,8 @@ def fit_sweep(data: SweepData, designs: np.ndarray, *, seed: int = 0,
     and the estimator's)."""
     ours, est_options = _split_options(dict(options or {}))
     X = encode(data.codes[designs], data.specs)
-    targets = BandTargets(centre_modes=ours["centre_modes"], profile_modes=n_modes or 128)
+    targets = BandTargets(centre_modes=ours["centre_modes"], profile_modes=n_modes or 128,
+                          spatial_tol=ours["spatial_tol"])
     T = targets.fit_transform(data.response[designs])
     est = fit_kind(get_kind("nn"), X, T, seed, est_options)
     if ours["loss"] == "magnitude":

@@ -59,7 +59,7 @@ def _inputs(data, designs, f_hz):
 
 def test_band_targets_rebuild_the_band_exactly_with_every_mode(sweep_data):
     data = load_sweep_datasets([sweep_data])
-    t = BandTargets(centre_modes=1000, profile_modes=1000)
+    t = BandTargets(centre_modes=1000, profile_modes=1000, spatial_tol=0.0)
     T = t.fit_transform(data.response)
     ln_s, z = t.components(T)
     got = log_magnitudes(z, ln_s[:, None])
@@ -80,6 +80,7 @@ def test_a_sweep_model_loads_through_the_runtime_predictor(sweep_model, sweep_da
     np.testing.assert_allclose(out["edge_amplitude_um"], out["profile_um"][:, 0], rtol=1e-6)
     np.testing.assert_array_equal(out["edge_radius_mm"], [5.5, 6.0])
     assert card["representation"]["name"] == "complex-band-pod"
+    assert card["representation"]["spatial_rel_error"]["profile"] <= 1e-3
     assert card["training"]["split"] == "by design"
     assert card["training"]["held_out_pairs"] == card["training"]["held_out"] * BAND_HZ.size
     assert card["training_data"][0]["manifest_sha256"]
@@ -150,6 +151,8 @@ def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
     assert err.value.field == "--kind"
     with pytest.raises(ValueError, match="loss = 'l1': allowed 'magnitude', 'coefficients'"):
         train_sweep([sweep_data], "nn", tmp_path / "n", options={"loss": "l1"})
+    with pytest.raises(ValueError, match="spatial_tol = 2: allowed"):
+        train_sweep([sweep_data], "nn", tmp_path / "n", options={"spatial_tol": 2})
     assert not (tmp_path / "g").exists() and not (tmp_path / "n").exists()
 
 
