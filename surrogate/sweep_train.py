@@ -1,5 +1,7 @@
-"""Train an NN surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``, which
-calls :func:`train_sweep` when every dataset is a sweep dataset).
+"""Train an NN or GP surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``
+or ``--kind gp``, which calls :func:`train_sweep` when every dataset is a sweep dataset).
+The GP's fit, variance and float64 graph: :mod:`surrogate.sweep_gp`,
+:mod:`surrogate.sweep_gp_export`; what follows is the NN's, and the pipeline both share.
 
 The model learns, per design, the complex-band representation of
 :class:`surrogate.sweep_targets.BandTargets` and ships it through the one graph contract of
