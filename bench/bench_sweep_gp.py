@@ -16,6 +16,11 @@ split-conformal factors of its calibration designs (:func:`surrogate.intervals.c
 and scored on the held-out designs: coverage and the median calibrated half-width (smaller
 is better at equal coverage).
 
+``--time-fit N`` times, on random inputs of the space's size (14 features, 178 targets), the
+fit's two cubic steps at full scale: one evaluation of the summed log marginal likelihood and
+its gradient on the hyperparameter subset (1,500 designs), and the kernel matrix and its
+Cholesky on N designs (CPU time of this process; run it with OMP_NUM_THREADS=1).
+
     python bench/bench_sweep_gp.py --data SWEEP_DIR --test-data TEST_DIR --out-dir DIR \
         --variants '[{"scale": "output"}, {"scale": "block"}]' --sigma-points 64
 """
@@ -107,6 +112,26 @@ def compare_std(data: Any, args: argparse.Namespace, options: dict[str, Any]) ->
               f"profile {np.median(width[3:]):.3f}", flush=True)
 
 
+def time_fit(n: int, d: int = 14, T: int = 178, n_hyper: int = 1500) -> None:
+    """CPU seconds of one likelihood + gradient evaluation at ``n_hyper`` designs and of the
+    kernel matrix + Cholesky at ``n`` designs (random inputs; see the docstring)."""
+    from scipy.linalg import cholesky
+
+    from surrogate.gp import ard_kernel
+    from surrogate.sweep_gp import _SummedGPR
+
+    rng = np.random.default_rng(0)
+    X = rng.uniform(size=(n_hyper, d))
+    gpr = _SummedGPR(ard_kernel("matern52", d, 1e-2, (1e-6, 1.0)), optimizer=None)
+    gpr.fit(X, np.sin(X @ rng.normal(size=(d, T))))
+    t0 = time.process_time()
+    gpr.log_marginal_likelihood(gpr.kernel_.theta, eval_gradient=True)
+    t1 = time.process_time()
+    cholesky(gpr.kernel_(rng.uniform(size=(n, d))), lower=True)
+    print(f"one likelihood + gradient at {n_hyper} designs x {T} targets: {t1 - t0:.1f} s CPU; "
+          f"kernel matrix + Cholesky at {n} designs: {time.process_time() - t1:.1f} s CPU")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True)
@@ -118,7 +143,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--modes", type=int, default=None)
     ap.add_argument("--sigma-points", type=int, default=0)
     ap.add_argument("--json", default=None, help="write the scores here")
+    ap.add_argument("--time-fit", type=int, default=0, help="time the cubic steps at N designs")
     args = ap.parse_args(argv)
+    if args.time_fit:
+        time_fit(args.time_fit)
     variants = json.loads(args.variants)
     data = load_sweep_datasets([args.data])
     test = load_sweep_datasets([args.test_data]) if args.test_data else None
