@@ -80,7 +80,7 @@ def sigma_point_std(est: Any, targets: Any, X: np.ndarray, n_f: int, draws: np.n
 def compare_std(data: Any, args: argparse.Namespace, options: dict[str, Any]) -> None:
     """Linearised std against S sigma points, each conformally calibrated (see docstring)."""
     tr, te = split(len(data.codes), args.test, args.seed)
-    tr, cal = _calibration_rows(tr, None, args.seed)
+    tr, cal = _calibration_rows(tr, args.calibration_fraction, args.seed)
     if cal.size == 0:
         cal, te = te[: te.size // 2], te[te.size // 2:]
     est, targets = fit_sweep_gp(data, tr, seed=args.seed, n_modes=args.modes, options=options)
@@ -142,6 +142,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--modes", type=int, default=None)
     ap.add_argument("--sigma-points", type=int, default=0)
+    ap.add_argument("--calibration-fraction", type=float, default=None,
+                    help="training designs kept out for the interval calibration (as "
+                    "hapticrom train)")
     ap.add_argument("--json", default=None, help="write the scores here")
     ap.add_argument("--time-fit", type=int, default=0, help="time the cubic steps at N designs")
     args = ap.parse_args(argv)
@@ -157,7 +160,8 @@ def main(argv: list[str] | None = None) -> int:
         out = Path(args.out_dir) / f"gp-sweep-{k}"
         t0 = time.perf_counter()
         card = train_sweep([args.data], "gp", out, test_fraction=args.test, seed=args.seed,
-                           n_modes=args.modes, options=dict(options), overwrite=True)
+                           n_modes=args.modes, options=dict(options), overwrite=True,
+                           calibration_fraction=args.calibration_fraction)
         seconds = time.perf_counter() - t0
         size = (out / "model.onnx").stat().st_size
         print(f"{json.dumps(options)}: {out}, train {seconds:.0f} s (GP fit "
