@@ -172,7 +172,11 @@ class SweepGP:
         self.X_train_ = X
         K = self._k(X, X)
         K[np.diag_indices_from(K)] += self.noise_
-        L = cholesky(K, lower=True, check_finite=False)
+        try:
+            L = cholesky(K, lower=True, check_finite=False)
+        except LinAlgError:  # a noise at its floor on thousands of designs: add the jitter
+            K[np.diag_indices_from(K)] += JITTER * self.amp_
+            L = cholesky(K, lower=True, check_finite=False)
         self.alpha_ = cho_solve((L, True), Ys, check_finite=False) * self.y_std_
         del K, L
         self.inducing_ = np.sort(perm[:self.inducing])
