@@ -119,8 +119,8 @@ class _SummedGPR(GaussianProcessRegressor):
 
 class SweepGP:
     """The fitted sweep GP (see the module docstring). After :meth:`fit`: ``kernel_``
-    (scikit-learn's fitted kernel), ``amp_``, ``length_scale_`` (d,), ``noise_`` (standardised
-    variances), ``X_train_`` (N, d), ``alpha_`` (N, T, with ``y_std_`` folded in),
+    (scikit-learn's fitted kernel), ``amp_``, ``length_scale_`` (d,), ``noise_`` (variances in
+    the scaled units), ``X_train_`` (N, d), ``alpha_`` (N, T, with ``y_std_`` folded in),
     ``y_mean_``/``y_std_`` (T,), ``inducing_`` (m,) row indices, ``Lm_inv_T_``,
     ``LB_inv_T_`` (m, m), ``hyper_rows_``, ``fit_seconds_``."""
 
