@@ -156,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{len(data.codes)} designs" + (f"; test set {len(test.codes)} designs"
                                           if test else ""), flush=True)
     results = {}
+    Path(args.out_dir).mkdir(parents=True, exist_ok=True)
     for k, options in enumerate(variants):
         out = Path(args.out_dir) / f"gp-sweep-{k}"
         t0 = time.perf_counter()
