@@ -21,6 +21,9 @@ fit's two cubic steps at full scale: one evaluation of the summed log marginal l
 its gradient on the hyperparameter subset (1,500 designs), and the kernel matrix and its
 Cholesky on N designs (CPU time of this process; run it with OMP_NUM_THREADS=1).
 
+``--profile MODEL_DIR`` prints where a graph spends its time: onnxruntime's node profile of
+five calls at 1,024 rows (the predictor's chunk), one thread, the share of each node.
+
     python bench/bench_sweep_gp.py --data SWEEP_DIR --test-data TEST_DIR --out-dir DIR \
         --variants '[{"scale": "output"}, {"scale": "block"}]' --sigma-points 64
 """
@@ -132,6 +135,33 @@ def time_fit(n: int, d: int = 14, T: int = 178, n_hyper: int = 1500) -> None:
           f"kernel matrix + Cholesky at {n} designs: {time.process_time() - t1:.1f} s CPU")
 
 
+def profile_graph(model_dir: str, rows: int = 1024, top: int = 8) -> None:
+    """Share of the graph's node time per node (onnxruntime profiling, one thread)."""
+    import collections
+    import tempfile
+
+    import onnxruntime as ort
+
+    opts = ort.SessionOptions()
+    opts.enable_profiling, opts.intra_op_num_threads = True, 1
+    opts.profile_file_prefix = str(Path(tempfile.mkdtemp()) / "profile")
+    session = ort.InferenceSession(str(Path(model_dir) / "model.onnx"), opts,
+                                   providers=["CPUExecutionProvider"])
+    spec = session.get_inputs()[0]
+    x = np.random.default_rng(0).uniform(size=(rows, spec.shape[1]))
+    x = x.astype(np.float64 if "double" in spec.type else np.float32)
+    for _ in range(5):
+        session.run(None, {"x": x})
+    events = json.loads(Path(session.end_profiling()).read_text())
+    total: collections.Counter[tuple[str, str]] = collections.Counter()
+    for e in events:
+        if e.get("cat") == "Node" and e["name"].endswith("_kernel_time"):
+            total[(e["args"]["op_name"], e["name"][:-len("_kernel_time")])] += e["dur"]
+    whole = sum(total.values())
+    for (op, name), dur in total.most_common(top):
+        print(f"{100 * dur / whole:5.1f} %  {op:12s} {name}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True)
@@ -147,7 +177,10 @@ def main(argv: list[str] | None = None) -> int:
                     "hapticrom train)")
     ap.add_argument("--json", default=None, help="write the scores here")
     ap.add_argument("--time-fit", type=int, default=0, help="time the cubic steps at N designs")
+    ap.add_argument("--profile", default=None, help="profile this model directory's graph")
     args = ap.parse_args(argv)
+    if args.profile:
+        profile_graph(args.profile)
     if args.time_fit:
         time_fit(args.time_fit)
     variants = json.loads(args.variants)
