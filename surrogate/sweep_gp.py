@@ -12,8 +12,8 @@ the coefficient j's variance is ``v(x) * y_std_[j]^2``. The scale (``scale`` opt
 (default) divides ln s by its std and each POD block's coefficients by one common scale (the
 RMS of their stds), so they keep their relative energies and the likelihood is driven by the
 modes that carry the band; "output" standardises every output, and the hundred low-energy,
-noise-like modes then pull the shared kernel to a large noise and short length scales (on 88
-designs of default-sweep, held-out centre median 11.5 % against 2.4 % with "block";
+noise-like modes then pull the shared kernel to a large noise and short length scales (on 178
+designs of default-sweep, held-out centre median 9.0 % against 2.8 % with "block";
 docs/sweep-models.md).
 
 * Hyperparameters (amp, ls, noise) maximise the marginal likelihood summed over the outputs
