@@ -59,13 +59,15 @@ def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
     return export_module(estimator.to_module(B, b), estimator.n_features_in_, metadata)
 
 
-def export_module(module: Any, n_features: int, metadata: Mapping[str, Any]) -> bytes:
-    """ONNX bytes of a torch module ``x (batch, n_features) float32 -> (log_mean, log_std)``
-    (the NN ensembles: :func:`export_nn`, the sweep models of :mod:`surrogate.sweep_export`)."""
+def export_module(module: Any, n_features: int, metadata: Mapping[str, Any],
+                  dtype: str = "float32") -> bytes:
+    """ONNX bytes of a torch module ``x (batch, n_features) dtype -> (log_mean, log_std)``
+    (the NN ensembles: :func:`export_nn`, the sweep models of :mod:`surrogate.sweep_export`;
+    ``dtype`` "float64": the sweep GP of :mod:`surrogate.sweep_gp_export`)."""
     # Lazy: torch costs 3.9 s to import; the GP's paths (surrogate.refine) need none of it.
     import torch
 
-    example = torch.zeros(2, n_features, dtype=torch.float32)
+    example = torch.zeros(2, n_features, dtype=getattr(torch, dtype))
     program = torch.onnx.export(module, (example,), dynamo=True, input_names=["x"],
                                 output_names=["log_mean", "log_std"],
                                 dynamic_shapes={"x": {0: "batch"}}, optimize=True,

@@ -1,5 +1,7 @@
-"""Train an NN surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``, which
-calls :func:`train_sweep` when every dataset is a sweep dataset).
+"""Train an NN or GP surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``
+or ``--kind gp``, which calls :func:`train_sweep` when every dataset is a sweep dataset).
+The GP's fit, variance and float64 graph: :mod:`surrogate.sweep_gp`,
+:mod:`surrogate.sweep_gp_export`; what follows is the NN's, and the pipeline both share.
 
 The model learns, per design, the complex-band representation of
 :class:`surrogate.sweep_targets.BandTargets` and ships it through the one graph contract of
@@ -48,6 +50,8 @@ from surrogate.sweep_export import (
     member_targets,
     reference_log_outputs,
 )
+from surrogate.sweep_gp import fit_sweep_gp, split_gp_options
+from surrogate.sweep_gp_export import export_sweep_gp, gp_parity
 from surrogate.sweep_targets import BandTargets, SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import (
     _calibration_rows,
@@ -59,8 +63,11 @@ from surrogate.train import (
     split,
 )
 
-__all__ = ["LOSSES", "PARITY_TOL", "band_tails", "fit_sweep", "sweep_metrics", "train_sweep"]
+__all__ = ["LOSSES", "PARITY_TOL", "SWEEP_KINDS", "band_tails", "fit_sweep", "sweep_metrics",
+           "train_sweep"]
 
+#: The kinds sweep datasets train (their graphs decode the complex band).
+SWEEP_KINDS = ("nn", "gp")
 LOSSES = ("magnitude", "coefficients")
 #: Largest |d ln| between the float32 graph and the float64 numpy rebuild of the same member
 #: outputs (the single-frequency NN's tolerance; measured 2e-6 on default-sweep)
@@ -162,50 +169,62 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                 overwrite: bool = False, categorical: str = "onehot",
                 options: dict[str, Any] | None = None, outputs: Sequence[str] = ("profile_um",),
                 calibration_fraction: float | None = None) -> dict[str, Any]:
-    """Train an NN sweep model on the sweep datasets ``paths`` and write ``out`` (arguments
-    as :func:`surrogate.train.train`; the split and the calibration rows are designs); return
-    its card. ``hapticrom train`` calls it when every dataset is a sweep dataset."""
+    """Train an NN or GP sweep model on the sweep datasets ``paths`` and write ``out``
+    (arguments as :func:`surrogate.train.train`; the split and the calibration rows are
+    designs); return its card. ``hapticrom train`` calls it when every dataset is a sweep
+    dataset. The GP: :mod:`surrogate.sweep_gp` (``options``: its ``GP_OPTIONS``)."""
     spec = get_kind(kind)
-    if kind != "nn":
-        raise FieldError("--kind", f"--kind {kind}: sweep datasets train the nn kind (its graph "
-                         "decodes the complex band); give single-frequency datasets for "
-                         f"{kind}")
+    if kind not in SWEEP_KINDS:
+        raise FieldError("--kind", f"--kind {kind}: sweep datasets train the "
+                         f"{' and '.join(SWEEP_KINDS)} kinds (their graphs decode the complex "
+                         f"band); give single-frequency datasets for {kind}")
     extra = check_outputs(outputs)
-    ours, est_options = _split_options(dict(options or {}))
+    if kind == "gp":
+        gp_options = split_gp_options(options)
+    else:
+        ours, est_options = _split_options(dict(options or {}))
     check_model_out(out, overwrite)
     data = load_sweep_datasets(paths, categorical=categorical)
     normal = "profile_normal_um" in extra
     tr, te = split(len(data.codes), test_fraction, seed)
     tr, cal = _calibration_rows(tr, calibration_fraction, seed)
     X = encode(data.codes, data.specs)
-    est, targets = fit_sweep(data, tr, seed=seed, n_modes=n_modes, normal=normal,
-                             options={**ours, **est_options})
     specs = data.all_specs
-    representation = {**targets.to_dict(), "loss": ours["loss"],
-                      "band_hz": {"start": float(data.band_hz[0]),
-                                  "stop": float(data.band_hz[-1]),
-                                  "step": float(data.band_hz[1] - data.band_hz[0])}}
+    band = {"band_hz": {"start": float(data.band_hz[0]), "stop": float(data.band_hz[-1]),
+                        "step": float(data.band_hz[1] - data.band_hz[0])}}
+    if kind == "gp":
+        est, targets = fit_sweep_gp(data, tr, seed=seed, n_modes=n_modes, options=gp_options)
+        representation = {**targets.to_dict(), **band}
+        fitted: dict[str, Any] = {"gp": est.card(), "estimator": {
+            k: _plain(v) for k, v in est.get_params().items()}}
+    else:
+        est, targets = fit_sweep(data, tr, seed=seed, n_modes=n_modes, normal=normal,
+                                 options={**ours, **est_options})
+        representation = {**targets.to_dict(), "loss": ours["loss"], **band}
+        fitted = {"loss": ours["loss"], **({"refit": {
+            "epochs": ours["refit_epochs"], "patience": ours["refit_patience"],
+            "learning_rate": ours["refit_learning_rate"], "centre_weight": ours["centre_weight"],
+            "best_epoch": list(est.refit_best_epoch_)}} if ours["loss"] == "magnitude" else {}),
+                  "estimator": {k: _plain(v) for k, v in est.get_params().items()}}
     card: dict[str, Any] = {
         **card_head(kind, spec.dtype, specs, data, extra),
         "representation": representation,
         "training": {"rows": int(tr.size), "held_out": int(te.size), "split": "by design",
                      "held_out_pairs": int(te.size * data.band_hz.size), "seed": seed,
                      "test_fraction": test_fraction, "pod_modes": targets.n_modes,
-                     "pod_energy": min(representation["pod_energy"].values()),
-                     "loss": ours["loss"], **({"refit": {
-                         "epochs": ours["refit_epochs"], "patience": ours["refit_patience"],
-                         "learning_rate": ours["refit_learning_rate"],
-                         "centre_weight": ours["centre_weight"],
-                         "best_epoch": list(est.refit_best_epoch_)}}
-                         if ours["loss"] == "magnitude" else {}),
-                     "estimator": {k: _plain(v) for k, v in est.get_params().items()}},
+                     "pod_energy": min(representation["pod_energy"].values()), **fitted},
         "versions": package_versions()}
     meta = {k: card[k] for k in ("kind", "inputs", "outputs", "profile_distance_mm",
                                  "training_data", "representation")}
-    onnx_bytes = export_sweep_nn(est, targets, normal, specs[-1].low, specs[-1].high,
-                                 data.band_hz, meta)
+    export = export_sweep_gp if kind == "gp" else export_sweep_nn
+    onnx_bytes = export(est, targets, normal, specs[-1].low, specs[-1].high, data.band_hz, meta)
     predictor = Predictor({**card, "files": {}}, make_session(onnx_bytes))
-    card["export_parity_max_abs_dln"] = _parity(est, targets, predictor, data, X, te, normal)
+    if kind == "gp":
+        parity = gp_parity(est, targets, predictor.session, data, specs, te, normal)
+        card["export_parity_max_abs_dln"] = parity["log_mean"]
+        card["export_parity"] = parity  # with log_std's relative difference
+    else:
+        card["export_parity_max_abs_dln"] = _parity(est, targets, predictor, data, X, te, normal)
     if cal.size:
         codes, centre, profile, ext = pair_rows(data, cal, normal)
         entry = calibrate(residuals(predictor.predict(codes), centre, profile, ext), extra=extra,

@@ -146,8 +146,8 @@ def test_sweep_and_single_frequency_data_mixed_are_refused(sweep_data, tmp_path)
 
 
 def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
-    with pytest.raises(FieldError, match="sweep datasets train the nn kind") as err:
-        train_sweep([sweep_data], "gp", tmp_path / "g")
+    with pytest.raises(FieldError, match="sweep datasets train the nn and gp kinds") as err:
+        train_sweep([sweep_data], "mlp", tmp_path / "g")
     assert err.value.field == "--kind"
     with pytest.raises(ValueError, match="loss = 'l1': allowed 'magnitude', 'coefficients'"):
         train_sweep([sweep_data], "nn", tmp_path / "n", options={"loss": "l1"})
