@@ -71,8 +71,10 @@ def test_between_grid_points_the_graph_equals_the_numpy_rebuild(data, fitted):
         x = np.column_stack([X, np.full(te.size, (f - BAND_HZ[0]) / (BAND_HZ[-1] - BAND_HZ[0]))])
         got_mean, got_std = session.run(["log_mean", "log_std"], {"x": x})
         np.testing.assert_allclose(got_mean, want, atol=1e-6)
+        # atol: the edge / centre column's std is zero up to rounding (the synthetic centre
+        # and edge move together): 1e-14 to 1e-11 by the path, against 3e-3 elsewhere
         np.testing.assert_allclose(got_std, linearised_log_std(targets, y, v, t, est.y_std_,
-                                                               True), rtol=1e-6, atol=1e-12)
+                                                               True), rtol=1e-6, atol=1e-9)
 
 
 def test_the_parity_check_passes_and_catches_a_wrong_graph(data, fitted):
@@ -98,7 +100,7 @@ def test_the_linearised_std_is_the_first_order_propagation(data, fitted):
         plus, _ = reference_log_outputs(targets, (y + step)[None], index, True)
         minus, _ = reference_log_outputs(targets, (y - step)[None], index, True)
         var += ((plus - minus) / (2 * h)) ** 2
-    np.testing.assert_allclose(got, np.sqrt(v[:, None] * var), rtol=1e-4)
+    np.testing.assert_allclose(got, np.sqrt(v[:, None] * var), rtol=1e-4, atol=1e-9)  # as above
 
 
 def test_the_variance_is_the_exact_gp_when_every_design_is_inducing(data, fitted):
