@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -212,7 +213,8 @@ def held_out_groups(model: str | Path = ROOT / "models" / "rom-default",
     df = Store.open(data).read()
     info = {int(r["sample_index"]): (r["attachment"], drive_frequency_hz(r["scene_json"]))
             for r in df[df["status"] == "ok"].to_dict("records")}
-    runs = card["metrics"]["held_out"]["runs"]
+    runs = [{k: math.nan if v is None else v for k, v in r.items()}  # JSON null: NaN
+            for r in card["metrics"]["held_out"]["runs"]]
     groups = {
         "glued": lambda a, f: a == "glued", "pogo": lambda a, f: a == "pogo",
         "below 100 Hz": lambda a, f: f < 100.0, "100 Hz and above": lambda a, f: f >= 100.0}
