@@ -9,8 +9,9 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
 2. **Steady response at the instantaneous speed**: A(omega), um, the harmonic model (the NN of
    ``models/nn-default``, shipped inside this model's directory as ``harmonic.onnx`` with its
    card) of that design at f = omega / 2 pi, times a learned design gain g (the harmonic model
-   is trained on hysteretic damping and a finer mesh; the FE transient turns the loss factor
-   into stiffness-proportional damping at the rated speed). The harmonic model covers
+   is trained on hysteretic damping, a finer mesh and a PML; the FE transients of
+   ``datasets/transient`` stand in for the hysteretic loss with the causal band model of
+   ``fem.viscoelastic``, its closest causal counterpart). The harmonic model covers
    100-250 Hz (the gain may vary with frequency there: g exp(s (f - 130 Hz) / 50 Hz), s
    learned too); below 100 Hz the response is continued with the unbalance force m e omega^2
    through the identified mode: A(omega) = A(omega_100) (omega / omega_100)^2
