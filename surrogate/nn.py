@@ -178,9 +178,11 @@ class MLPEnsembleRegressor(RegressorMixin, BaseEstimator):
     def predict(self, X: Any, return_std: bool = False) -> Any:
         check_is_fitted(self)
         X = validate_data(self, X, dtype=float, reset=False)
+        # in float64: float32 products round differently with the batch's size on some CPUs
+        # (2 ulp), and a row's prediction must not depend on the rows beside it
         with torch.no_grad():
-            mean, std = self.to_module()(torch.as_tensor(X, dtype=torch.float32))
-        mean, std = mean.double().numpy(), std.double().numpy()
+            mean, std = self.to_module().double()(torch.as_tensor(X, dtype=torch.float64))
+        mean, std = mean.numpy(), std.numpy()
         if self._y_1d:
             mean, std = mean[:, 0], std[:, 0]
         return (mean, std) if return_std else mean
