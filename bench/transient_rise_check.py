@@ -5,9 +5,13 @@ as ``surrogate.rom`` does), the model's envelope (``models/rom-default``), the m
 speed^2 (the unbalance force, normalised by its level at switch-off) and the model's
 quasi-static envelope (steady response at the instantaneous speed, no mode dynamics), each
 as a fraction of its own level over the last 5 ms before switch-off; and their 10 % / 90 %
-crossing times as ``surrogate.rom_metrics`` reads them.
+crossing times as ``surrogate.rom_metrics`` reads them. With ``--harmonic`` also the steady
+response along the spin-up: the FE harmonic solve of the row's own scene (same mesh, hysteretic
+loss) at the speeds the motor passes, against the model's steady part A(f) (harmonic NN times
+the learned gain, continued below 100 Hz through the mode), each over its value at the speed
+reached at switch-off: the 10-90 % rise of a slow spin-up is where A(f(t)) crosses 0.9.
 
-    python bench/transient_rise_check.py --samples 175 219 75 95 247
+    python bench/transient_rise_check.py --samples 175 219 75 95 247 --harmonic
 """
 
 from __future__ import annotations
@@ -58,12 +62,41 @@ def check(row: dict, model, point: int = 0) -> dict[str, dict]:
     return out
 
 
+def steady_along_spin_up(row: dict, model, point: int = 0) -> dict[str, np.ndarray]:
+    """FE harmonic amplitudes (um) of the row's scene and the model's A(f) at the speeds
+    40, 60, ... Hz up to the speed at switch-off (last entry)."""
+    from fem.scene.io import scene_from_dict
+    from fem.simulation import simulate
+
+    run, _ = rom.run_from_row(row, model.design_names)
+    f_end = float(np.interp(run.on_time_s - 0.5 * STEADY_WINDOW_S, run.t, run.omega)) / (
+        2 * math.pi)
+    freqs = np.append(np.arange(40.0, f_end - 2.0, 10.0), f_end)
+    par = model.parameters(run.design, extrapolate=True)[rom.POINTS[point]]
+    amp = model.steady_amplitudes(run.design, extrapolate=True)[rom.POINTS[point]]
+    w = 2 * math.pi * freqs
+    a_model = (gain_factor(w, np.array([par["gain"]]), np.array([par["gain_slope"]]))
+               * continued_steady(w, model.grid_hz, amp[None, :], np.array([par["sigma_1_s"]]),
+                                  np.array([par["fn_hz"]])))[0]
+    scene = json.loads(row["scene_json"])
+    for key in ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule", "damping"):
+        scene["analysis"].pop(key, None)
+    a_fe = []
+    for f in freqs:
+        scene["analysis"].update(kind="harmonic", frequency_hz=float(f))
+        res = simulate(scene_from_dict(scene))
+        a_fe.append(res.center_amplitude_um if point == 0 else res.edge_amplitude_um)
+    return {"f_hz": freqs, "fe_harmonic_um": np.array(a_fe), "model_um": a_model}
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(ROOT / "datasets" / "transient"))
     ap.add_argument("--model", default=str(ROOT / "models" / "rom-default"))
     ap.add_argument("--samples", type=int, nargs="+", default=[175, 219, 75, 95, 247])
     ap.add_argument("--point", choices=rom.POINTS, default="center")
+    ap.add_argument("--harmonic", action="store_true",
+                    help="also solve the FE steady response along the spin-up (fast solves)")
     args = ap.parse_args(argv)
     model = load_envelope_model(args.model)
     df = Store.open(args.data).read()
@@ -73,8 +106,10 @@ def main(argv: list[str] | None = None) -> int:
         m = scene["unit"]["motor"]
         res = check(row, model, rom.POINTS.index(args.point))
         r = res.pop("_run")
-        print(f"run {si} ({row.get('attachment')}, {args.point}): tau_up {m['tau_spinup_ms']:.1f} ms, "
-              f"schedule {scene['analysis']['voltage_schedule'][:3]}; off at {r['on_ms']:.1f} ms, "
+        print(f"run {si} ({row.get('attachment')}, {args.point}): "
+              f"tau_up {m['tau_spinup_ms']:.1f} ms, "
+              f"schedule {scene['analysis']['voltage_schedule'][:3]}; "
+              f"off at {r['on_ms']:.1f} ms, "
               f"speed there {r['f_end_hz']:.1f} Hz; mode sigma {r['sigma']:.0f} 1/s "
               f"f_n {r['fn_hz']:.0f} Hz")
         print(f"  {'curve':13s} {'level':>8s} {'t10':>6s} {'t90':>6s} {'rise':>6s}  "
@@ -82,6 +117,14 @@ def main(argv: list[str] | None = None) -> int:
         for name, c in res.items():
             print(f"  {name:13s} {c['level']:8.3g} {c['t10_ms']:6.1f} {c['t90_ms']:6.1f} "
                   f"{c['rise_ms']:6.1f}  " + " ".join(f"{x:5.2f}" for x in c["frac"]))
+        if args.harmonic:
+            s = steady_along_spin_up(row, model, rom.POINTS.index(args.point))
+            print("  steady response along the spin-up (over its value at the last speed):")
+            print("    f Hz        " + " ".join(f"{x:6.1f}" for x in s["f_hz"]))
+            for name in ("fe_harmonic_um", "model_um"):
+                y = s[name]
+                print(f"    {name[:-3]:11s} " + " ".join(f"{x:6.2f}" for x in y / y[-1])
+                      + f"   (last {y[-1]:.2f} um)")
     return 0
 
 
