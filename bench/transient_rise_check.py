@@ -12,6 +12,11 @@ the learned gain, continued below 100 Hz through the mode), each over its value 
 reached at switch-off: the 10-90 % rise of a slow spin-up is where A(f(t)) crosses 0.9.
 
     python bench/transient_rise_check.py --samples 175 219 75 95 247 --harmonic
+
+``--quasi-static`` does it for every held-out run (``sample_index % 4 == 3``; about 25 fast
+harmonic solves per run): the rise of the quasi-static FE envelope A_FE(f(t)) (harmonic solves
+every 5 Hz, interpolated on the run's speed curve) against the FE's and the model's rises,
+and the correlation of the model's rise error with its quasi-static part.
 """
 
 from __future__ import annotations
@@ -89,6 +94,63 @@ def steady_along_spin_up(row: dict, model, point: int = 0) -> dict[str, np.ndarr
     return {"f_hz": freqs, "fe_harmonic_um": np.array(a_fe), "model_um": a_model}
 
 
+def _rise_ms(t: np.ndarray, y: np.ndarray, on_s: float) -> float:
+    _, t10, t90 = crossings(t, y, on_s)
+    return t90 - t10
+
+
+def quasi_static_rises(row: dict, model, step_hz: float = 5.0) -> dict[str, float]:
+    """Centre rise (ms) of the FE envelope, the model's, and of the quasi-static envelopes
+    A(f(t)) of the FE (harmonic solves every ``step_hz`` of the row's scene) and the model."""
+    from fem.scene.io import scene_from_dict
+    from fem.simulation import simulate
+
+    run, _ = rom.run_from_row(row, model.design_names)
+    t, on, w = run.t, run.on_time_s, run.omega
+    f = w / (2 * math.pi)
+    f_max = float(f[t < on].max())
+    grid = np.append(np.arange(step_hz, f_max, step_hz), f_max)
+    scene = json.loads(row["scene_json"])
+    for key in ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule", "damping"):
+        scene["analysis"].pop(key, None)
+    a_fe = []
+    for fi in grid:
+        scene["analysis"].update(kind="harmonic", frequency_hz=float(fi))
+        a_fe.append(simulate(scene_from_dict(scene)).center_amplitude_um)
+    q_fe = np.interp(f, np.append(0.0, grid), np.append(0.0, a_fe))
+    par = model.parameters(run.design, extrapolate=True)["center"]
+    amp = model.steady_amplitudes(run.design, extrapolate=True)["center"]
+    q_model = (gain_factor(w, np.array([par["gain"]]), np.array([par["gain_slope"]]))
+               * continued_steady(w, model.grid_hz, amp[None, :], np.array([par["sigma_1_s"]]),
+                                  np.array([par["fn_hz"]])))[0]
+    sim = model.simulate(t, run.volts, run.design, extrapolate=True)[STATES[0]]
+    return {"fe": _rise_ms(t, run.env[0], on), "model": _rise_ms(t, sim, on),
+            "fe_quasi": _rise_ms(t, q_fe, on), "model_quasi": _rise_ms(t, q_model, on)}
+
+
+def held_out_quasi_static(df, model) -> None:
+    """Print :func:`quasi_static_rises` of every held-out run and the summary."""
+    rows = df[(df["status"] == "ok") & df["history_center_um"].notna()
+              & (df["sample_index"] % 4 == 3)]
+    out = []
+    for row in rows.to_dict("records"):
+        r = quasi_static_rises(row, model)
+        out.append(r)
+        print(f"run {int(row['sample_index'])} ({row['attachment']}): rise ms FE {r['fe']:.1f} "
+              f"model {r['model']:.1f} | quasi-static FE {r['fe_quasi']:.1f} "
+              f"model {r['model_quasi']:.1f}", flush=True)
+    a = {k: np.array([r[k] for r in out]) for k in out[0]}
+    err, qerr = a["model"] - a["fe"], a["model_quasi"] - a["fe_quasi"]
+    big = np.abs(err) > 10.0
+    print(f"{len(out)} held-out runs, centre: |model - FE| rise median {np.median(np.abs(err)):.2f}"
+          f" max {np.max(np.abs(err)):.1f} ms; |quasi-static model - quasi-static FE| median "
+          f"{np.median(np.abs(qerr)):.2f} max {np.max(np.abs(qerr)):.1f} ms; |quasi-static FE - "
+          f"FE| median {np.median(np.abs(a['fe_quasi'] - a['fe'])):.2f} ms")
+    print(f"correlation of the rise error with its quasi-static part: "
+          f"{np.corrcoef(err, qerr)[0, 1]:.2f} (all), {np.corrcoef(err[big], qerr[big])[0, 1]:.2f}"
+          f" ({int(big.sum())} runs with |error| > 10 ms)")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(ROOT / "datasets" / "transient"))
@@ -97,9 +159,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--point", choices=rom.POINTS, default="center")
     ap.add_argument("--harmonic", action="store_true",
                     help="also solve the FE steady response along the spin-up (fast solves)")
+    ap.add_argument("--quasi-static", action="store_true",
+                    help="quasi-static rise check of every held-out run (centre)")
     args = ap.parse_args(argv)
     model = load_envelope_model(args.model)
     df = Store.open(args.data).read()
+    if args.quasi_static:
+        held_out_quasi_static(df, model)
+        return 0
     for si in args.samples:
         row = df[df["sample_index"] == si].iloc[0].to_dict()
         scene = json.loads(row["scene_json"])
