@@ -92,13 +92,17 @@ class Run:
 def complex_envelopes(u: NDArray, phi: NDArray) -> NDArray:
     """Complex envelopes analytic(u_c) e^{-i phi} of (3, nt) component histories.
 
-    Before the FFT-based Hilbert transform the record is extended at its start by odd
-    reflection (continuous in value and slope: the run starts from rest) and at its end by
-    zeros, which keeps the end artefacts within about a period."""
+    Before the FFT-based Hilbert transform the record is extended at its start by even
+    reflection and at its end by zeros, which keeps the end artefacts within about a period.
+    The run starts from rest (u = du/dt = 0), so the even extension is smooth at t = 0 and
+    its Hilbert transform vanishes there: the envelope starts at 0, as the model's does. An
+    odd reflection does not: the first slow cycles of a spin-up (a few hertz) in a component
+    in sine phase with the rotor (u_theta on the theta = 0 meridian) give a spurious envelope
+    of 10-15 % of the steady level at t = 0 (measured: ``bench/transient_rise_check.py``)."""
     from scipy.signal import hilbert
 
     u = np.asarray(u, dtype=float)
-    head = -u[:, 1:][:, ::-1]
+    head = u[:, 1:][:, ::-1]
     tail = np.zeros((u.shape[0], u.shape[1] - 1))
     ext = np.concatenate([head, u, tail], axis=1)
     a = hilbert(ext, axis=1)[:, head.shape[1]: head.shape[1] + u.shape[1]]
