@@ -186,6 +186,23 @@ def test_a_host_frozen_by_sigstop_is_told_the_pattern_was_cut_short(tmp_path):
     assert "watchdog" in err and "not played in full: steps" in err and "Traceback" not in err
 
 
+def test_emulate_stops_on_ctrl_c_even_when_started_with_sigint_ignored():
+    """A background job of a script inherits SIGINT ignored; the emulator still stops on it."""
+    proc = _python("emulate", "--channels", "1",
+                   preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    try:
+        assert proc.stdout.readline().strip().startswith("/dev/")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+            pytest.fail("the emulator ignored SIGINT")
+    assert proc.returncode == 130
+
+
 def test_emulate_prints_its_port_serves_play_and_stops_on_ctrl_c(tmp_path, capsys):
     proc = _python("emulate", "--channels", "3", "--max-level", "1.6")
     try:
