@@ -70,8 +70,6 @@ def check(row: dict, model, point: int = 0) -> dict[str, dict]:
 def steady_along_spin_up(row: dict, model, point: int = 0) -> dict[str, np.ndarray]:
     """FE harmonic amplitudes (um) of the row's scene and the model's A(f) at the speeds
     40, 60, ... Hz up to the speed at switch-off (last entry)."""
-    from fem.scene.io import scene_from_dict
-    from fem.simulation import simulate
 
     run, _ = rom.run_from_row(row, model.design_names)
     f_end = float(np.interp(run.on_time_s - 0.5 * STEADY_WINDOW_S, run.t, run.omega)) / (
@@ -83,15 +81,25 @@ def steady_along_spin_up(row: dict, model, point: int = 0) -> dict[str, np.ndarr
     a_model = (gain_factor(w, np.array([par["gain"]]), np.array([par["gain_slope"]]))
                * continued_steady(w, model.grid_hz, amp[None, :], np.array([par["sigma_1_s"]]),
                                   np.array([par["fn_hz"]])))[0]
+    a_fe = harmonic_amplitudes(row, freqs, point)
+    return {"f_hz": freqs, "fe_harmonic_um": a_fe, "model_um": a_model}
+
+
+def harmonic_amplitudes(row: dict, freqs_hz, point: int = 0) -> np.ndarray:
+    """Steady amplitudes (um) of the row's scene solved harmonically (hysteretic loss: the
+    transient's schedule and damping keys dropped) at ``freqs_hz``; centre (0) or edge (1)."""
+    from fem.scene.io import scene_from_dict
+    from fem.simulation import simulate
+
     scene = json.loads(row["scene_json"])
     for key in ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule", "damping"):
         scene["analysis"].pop(key, None)
-    a_fe = []
-    for f in freqs:
+    out = []
+    for f in freqs_hz:
         scene["analysis"].update(kind="harmonic", frequency_hz=float(f))
         res = simulate(scene_from_dict(scene))
-        a_fe.append(res.center_amplitude_um if point == 0 else res.edge_amplitude_um)
-    return {"f_hz": freqs, "fe_harmonic_um": np.array(a_fe), "model_um": a_model}
+        out.append(res.center_amplitude_um if point == 0 else res.edge_amplitude_um)
+    return np.array(out)
 
 
 def _rise_ms(t: np.ndarray, y: np.ndarray, on_s: float) -> float:
@@ -102,21 +110,13 @@ def _rise_ms(t: np.ndarray, y: np.ndarray, on_s: float) -> float:
 def quasi_static_rises(row: dict, model, step_hz: float = 5.0) -> dict[str, float]:
     """Centre rise (ms) of the FE envelope, the model's, and of the quasi-static envelopes
     A(f(t)) of the FE (harmonic solves every ``step_hz`` of the row's scene) and the model."""
-    from fem.scene.io import scene_from_dict
-    from fem.simulation import simulate
 
     run, _ = rom.run_from_row(row, model.design_names)
     t, on, w = run.t, run.on_time_s, run.omega
     f = w / (2 * math.pi)
     f_max = float(f[t < on].max())
     grid = np.append(np.arange(step_hz, f_max, step_hz), f_max)
-    scene = json.loads(row["scene_json"])
-    for key in ("time_step_ms", "duration_ms", "rho_inf", "voltage_schedule", "damping"):
-        scene["analysis"].pop(key, None)
-    a_fe = []
-    for fi in grid:
-        scene["analysis"].update(kind="harmonic", frequency_hz=float(fi))
-        a_fe.append(simulate(scene_from_dict(scene)).center_amplitude_um)
+    a_fe = harmonic_amplitudes(row, grid)
     q_fe = np.interp(f, np.append(0.0, grid), np.append(0.0, a_fe))
     par = model.parameters(run.design, extrapolate=True)["center"]
     amp = model.steady_amplitudes(run.design, extrapolate=True)["center"]
