@@ -25,7 +25,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import traceback
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
@@ -68,6 +70,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _interruptible() -> None:
+    """Ctrl-C stops every command (exit 130, below). A process started in the background by a
+    script inherits SIGINT ignored, and Python then leaves it so: the long-running commands
+    (emulate, play, generate) could be stopped only by SIGTERM or SIGKILL. Restored here, in
+    the main thread only (a handler can be set nowhere else), and only where it is ignored."""
+    if (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) == signal.SIG_IGN):
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     try:
@@ -75,6 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # usage error (2, message printed) or --help (0): return, not exit
         return int(exc.code or EXIT_OK)
     name = args.command
+    _interruptible()
     try:
         return int(args.func(args) or EXIT_OK)
     except KeyboardInterrupt:

@@ -164,6 +164,26 @@ def fit_sweep(data: SweepData, designs: np.ndarray, *, seed: int = 0,
     return est, targets
 
 
+def _fit(kind: str, checked: Any, data: SweepData, designs: np.ndarray, seed: int,
+         n_modes: int | None, normal: bool) -> tuple[Any, BandTargets, dict[str, Any]]:
+    """(estimator, targets, the card's training entries of the fit) of ``kind`` on ``designs``
+    with its checked options (the GP's dict, or the NN's (ours, estimator's) pair)."""
+    if kind == "gp":
+        est, targets = fit_sweep_gp(data, designs, seed=seed, n_modes=n_modes, options=checked)
+        return est, targets, {"gp": est.card(), "estimator": {
+            k: _plain(v) for k, v in est.get_params().items()}}
+    ours, est_options = checked
+    est, targets = fit_sweep(data, designs, seed=seed, n_modes=n_modes, normal=normal,
+                             options={**ours, **est_options})
+    refit = ({"refit": {"epochs": ours["refit_epochs"], "patience": ours["refit_patience"],
+                        "learning_rate": ours["refit_learning_rate"],
+                        "centre_weight": ours["centre_weight"],
+                        "best_epoch": list(est.refit_best_epoch_)}}
+             if ours["loss"] == "magnitude" else {})
+    return est, targets, {"loss": ours["loss"], **refit,
+                          "estimator": {k: _plain(v) for k, v in est.get_params().items()}}
+
+
 def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                 test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
                 overwrite: bool = False, categorical: str = "onehot",
@@ -179,33 +199,20 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                          f"{' and '.join(SWEEP_KINDS)} kinds (their graphs decode the complex "
                          f"band); give single-frequency datasets for {kind}")
     extra = check_outputs(outputs)
-    if kind == "gp":
-        gp_options = split_gp_options(options)
-    else:
-        ours, est_options = _split_options(dict(options or {}))
+    # checked before anything is read or written: a bad option fails at once
+    checked = split_gp_options(options) if kind == "gp" else _split_options(dict(options or {}))
     check_model_out(out, overwrite)
     data = load_sweep_datasets(paths, categorical=categorical)
     normal = "profile_normal_um" in extra
     tr, te = split(len(data.codes), test_fraction, seed)
     tr, cal = _calibration_rows(tr, calibration_fraction, seed)
-    X = encode(data.codes, data.specs)
     specs = data.all_specs
-    band = {"band_hz": {"start": float(data.band_hz[0]), "stop": float(data.band_hz[-1]),
-                        "step": float(data.band_hz[1] - data.band_hz[0])}}
-    if kind == "gp":
-        est, targets = fit_sweep_gp(data, tr, seed=seed, n_modes=n_modes, options=gp_options)
-        representation = {**targets.to_dict(), **band}
-        fitted: dict[str, Any] = {"gp": est.card(), "estimator": {
-            k: _plain(v) for k, v in est.get_params().items()}}
-    else:
-        est, targets = fit_sweep(data, tr, seed=seed, n_modes=n_modes, normal=normal,
-                                 options={**ours, **est_options})
-        representation = {**targets.to_dict(), "loss": ours["loss"], **band}
-        fitted = {"loss": ours["loss"], **({"refit": {
-            "epochs": ours["refit_epochs"], "patience": ours["refit_patience"],
-            "learning_rate": ours["refit_learning_rate"], "centre_weight": ours["centre_weight"],
-            "best_epoch": list(est.refit_best_epoch_)}} if ours["loss"] == "magnitude" else {}),
-                  "estimator": {k: _plain(v) for k, v in est.get_params().items()}}
+    est, targets, fitted = _fit(kind, checked, data, tr, seed, n_modes, normal)
+    representation = {**targets.to_dict(), **({"loss": fitted["loss"]} if "loss" in fitted
+                                              else {}),
+                      "band_hz": {"start": float(data.band_hz[0]),
+                                  "stop": float(data.band_hz[-1]),
+                                  "step": float(data.band_hz[1] - data.band_hz[0])}}
     card: dict[str, Any] = {
         **card_head(kind, spec.dtype, specs, data, extra),
         "representation": representation,
@@ -224,6 +231,7 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
         card["export_parity_max_abs_dln"] = parity["log_mean"]
         card["export_parity"] = parity  # with log_std's relative difference
     else:
+        X = encode(data.codes, data.specs)
         card["export_parity_max_abs_dln"] = _parity(est, targets, predictor, data, X, te, normal)
     if cal.size:
         codes, centre, profile, ext = pair_rows(data, cal, normal)

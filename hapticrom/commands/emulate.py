@@ -14,7 +14,6 @@ goes to stderr. It runs until Ctrl-C (exit 130).
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 import time
 
@@ -40,10 +39,6 @@ def _run(args: argparse.Namespace) -> int:
     watchdog_s = args.watchdog_ms / 1e3 if args.watchdog_ms else DEFAULT_WATCHDOG_S
     max_on_s = args.max_on_ms / 1e3 if args.max_on_ms else DEFAULT_MAX_ON_S
     max_level = args.max_level or DEFAULT_MAX_LEVEL
-    # Ctrl-C (SIGINT) is how it stops: a process started in the background by a script
-    # inherits SIGINT ignored (and Python then leaves it so), which would make it unstoppable
-    # but by SIGTERM or SIGKILL
-    signal.signal(signal.SIGINT, signal.default_int_handler)
     with PtyEmulator(args.channels, watchdog_s=watchdog_s, max_on_s=max_on_s,
                      max_level=max_level) as emu:
         print(emu.port, flush=True)

@@ -187,7 +187,7 @@ def test_a_host_frozen_by_sigstop_is_told_the_pattern_was_cut_short(tmp_path):
 
 
 def test_emulate_stops_on_ctrl_c_even_when_started_with_sigint_ignored():
-    """A background job of a script inherits SIGINT ignored; the emulator still stops on it."""
+    """A background job of a script inherits SIGINT ignored; the command line restores it."""
     proc = _python("emulate", "--channels", "1",
                    preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     try:
