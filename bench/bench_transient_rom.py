@@ -267,7 +267,7 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
     from scipy.optimize import least_squares
 
     from surrogate import rom
-    from surrogate.runtime.rom import continued_steady, gain_factor, load_envelope_model
+    from surrogate.runtime.rom import continued_steady, load_envelope_model, steady_response
 
     model = load_envelope_model(ROOT / "models" / "rom-default")
     df = pd.read_parquet(sorted((ROOT / "datasets" / "transient").glob("part-*.parquet"))[part])
@@ -283,14 +283,14 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
             k = (t > 3e-3) & (t < t[-1] - 3e-3)
             return float(np.sqrt(np.mean((y[k] - e[k]) ** 2)) / scale)
 
-        q = continued_steady(run.omega, rom.GRID_HZ, a, np.array([1e4]), np.array([0.0]))[0]
+        q = continued_steady(run.omega, model.grid_hz, a, np.array([1e4]), np.array([0.0]))[0]
         lag = []
         for tau in (0.0, 0.5e-3, 1e-3, 2e-3, 3e-3, 5e-3, 8e-3, 12e-3):
             y = _lag(t, q, tau)
             lag.append(nrmse(y * (y @ e) / (y @ y)))
 
         def one(x: np.ndarray, run=run, a=a, t=t) -> np.ndarray:
-            return rom._predict(t, run.omega[None], a, np.asarray(x)[None])[0]
+            return rom._predict(t, run.omega[None], a, model.grid_hz, np.asarray(x)[None])[0]
 
         best1 = min((least_squares(lambda x, one=one, e=e, keep=keep, scale=scale:
                                    ((one(x) - e) / scale)[keep], [np.log(60.0), f0, 0.0, 0.0],
@@ -298,8 +298,8 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
                                    max_nfev=60) for f0 in (35.0, 50.0, 70.0)),
                     key=lambda s: s.cost)
         x1 = best1.x
-        st = continued_steady(run.omega, rom.GRID_HZ, a, np.exp(x1[:1]), x1[1:2])
-        q1 = (gain_factor(run.omega, np.exp(x1[2:3]), x1[3:4]) * st)[0]
+        q1 = steady_response(run.omega, model.grid_hz, a, np.exp(x1[:1]), x1[1:2],
+                             np.exp(x1[2:3]), x1[3:4])[0]
         best2 = min((least_squares(lambda x, t=t, q1=q1, run=run, e=e, keep=keep, scale=scale:
                                    ((_two_modes(t, run.omega, q1, x) - e) / scale)[keep],
                                    [x1[0], x1[1], np.log(150.0), f2, w0, 0.0],

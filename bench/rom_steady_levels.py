@@ -126,18 +126,10 @@ def tone_amplitude(t: np.ndarray, u: np.ndarray, omega: float, end_s: float,
 
 def model_steady(model: Any, design: dict[str, Any], omega: float) -> np.ndarray:
     """The envelope model's steady (center, edge) level (um) at ``omega`` (rad/s)."""
-    from surrogate.runtime.rom import POINTS, continued_steady, gain_factor
+    from surrogate.runtime.rom import POINTS
 
-    par = model.parameters(design, extrapolate=True)
-    amp = model.steady_amplitudes(design, extrapolate=True)
-    w = np.array([omega])
-    out = []
-    for p in POINTS:
-        q = par[p]
-        sig, fn = np.array([q["sigma_1_s"]]), np.array([q["fn_hz"]])
-        out.append(float((gain_factor(w, np.array([q["gain"]]), np.array([q["gain_slope"]]))
-                          * continued_steady(w, model.grid_hz, amp[p][None, :], sig, fn))[0, 0]))
-    return np.array(out)
+    levels = model.steady_levels(np.array([omega]), design, extrapolate=True)
+    return np.array([float(levels[p][0]) for p in POINTS])
 
 
 def diagnose(limit: int | None = None, model_path: str | Path = ROOT / "models" / "rom-default",

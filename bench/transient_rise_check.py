@@ -31,7 +31,7 @@ import numpy as np
 from surrogate import rom
 from surrogate.data.store import Store
 from surrogate.rom_metrics import STEADY_WINDOW_S, first_crossing
-from surrogate.runtime.rom import STATES, continued_steady, gain_factor, load_envelope_model
+from surrogate.runtime.rom import STATES, load_envelope_model
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBE_MS = (5, 10, 15, 20, 25, 30, 40, 50, 60, 80, 100, 120, 140)
@@ -50,10 +50,7 @@ def check(row: dict, model, point: int = 0) -> dict[str, dict]:
     t, on = run.t, run.on_time_s
     sim = model.simulate(t, run.volts, run.design, extrapolate=True)
     par = model.parameters(run.design, extrapolate=True)[rom.POINTS[point]]
-    amp = model.steady_amplitudes(run.design, extrapolate=True)[rom.POINTS[point]]
-    sig, fn = np.array([par["sigma_1_s"]]), np.array([par["fn_hz"]])
-    quasi = (gain_factor(run.omega, np.array([par["gain"]]), np.array([par["gain_slope"]]))
-             * continued_steady(run.omega, model.grid_hz, amp[None, :], sig, fn))[0]
+    quasi = model.steady_levels(run.omega, run.design, extrapolate=True)[rom.POINTS[point]]
     curves = {"fe": run.env[point], "model": sim[STATES[point]],
               "speed^2": run.omega ** 2, "quasi-static": quasi}
     out = {}
@@ -75,12 +72,8 @@ def steady_along_spin_up(row: dict, model, point: int = 0) -> dict[str, np.ndarr
     f_end = float(np.interp(run.on_time_s - 0.5 * STEADY_WINDOW_S, run.t, run.omega)) / (
         2 * math.pi)
     freqs = np.append(np.arange(40.0, f_end - 2.0, 10.0), f_end)
-    par = model.parameters(run.design, extrapolate=True)[rom.POINTS[point]]
-    amp = model.steady_amplitudes(run.design, extrapolate=True)[rom.POINTS[point]]
-    w = 2 * math.pi * freqs
-    a_model = (gain_factor(w, np.array([par["gain"]]), np.array([par["gain_slope"]]))
-               * continued_steady(w, model.grid_hz, amp[None, :], np.array([par["sigma_1_s"]]),
-                                  np.array([par["fn_hz"]])))[0]
+    a_model = model.steady_levels(2 * math.pi * freqs, run.design,
+                                  extrapolate=True)[rom.POINTS[point]]
     a_fe = harmonic_amplitudes(row, freqs, point)
     return {"f_hz": freqs, "fe_harmonic_um": a_fe, "model_um": a_model}
 
@@ -118,11 +111,7 @@ def quasi_static_rises(row: dict, model, step_hz: float = 5.0) -> dict[str, floa
     grid = np.append(np.arange(step_hz, f_max, step_hz), f_max)
     a_fe = harmonic_amplitudes(row, grid)
     q_fe = np.interp(f, np.append(0.0, grid), np.append(0.0, a_fe))
-    par = model.parameters(run.design, extrapolate=True)["center"]
-    amp = model.steady_amplitudes(run.design, extrapolate=True)["center"]
-    q_model = (gain_factor(w, np.array([par["gain"]]), np.array([par["gain_slope"]]))
-               * continued_steady(w, model.grid_hz, amp[None, :], np.array([par["sigma_1_s"]]),
-                                  np.array([par["fn_hz"]])))[0]
+    q_model = model.steady_levels(w, run.design, extrapolate=True)["center"]
     sim = model.simulate(t, run.volts, run.design, extrapolate=True)[STATES[0]]
     return {"fe": _rise_ms(t, run.env[0], on), "model": _rise_ms(t, sim, on),
             "fe_quasi": _rise_ms(t, q_fe, on), "model_quasi": _rise_ms(t, q_model, on)}

@@ -54,16 +54,15 @@ from surrogate.runtime.rom import (
     MOTOR_INPUTS,
     PARAMS,
     POINTS,
-    continued_steady,
-    gain_factor,
+    harmonic_grid,
     mode_response,
     model_from_parts,
+    steady_response,
 )
 
 __all__ = ["Run", "complex_envelopes", "fit_weights", "load_runs", "train"]
 
 EDGE_TRIM_S = 3e-3  # the Hilbert transform is least accurate within ~1 period of the ends
-GRID_HZ = np.arange(100.0, 250.0 + 1e-9, 2.5)
 SIGMA_GRID = np.geomspace(10.0, 800.0, 9)  # 1/s
 FN_GRID = np.arange(20.0, 201.0, 10.0)  # Hz
 RIDGE = 1e-2
@@ -196,15 +195,15 @@ def _batch(runs: Sequence[Run], amp: dict[str, NDArray], point: int
             amp[POINTS[point]], keep)
 
 
-def _predict(t: NDArray, omega: NDArray, amp: NDArray, p: NDArray) -> NDArray:
-    """Model envelopes (nb, nt) for parameter rows p (nb, 4) in ``PARAMS`` order."""
+def _predict(t: NDArray, omega: NDArray, amp: NDArray, grid: NDArray, p: NDArray) -> NDArray:
+    """Model envelopes (nb, nt) for parameter rows p (nb, 4) in ``PARAMS`` order, harmonic
+    amplitudes ``amp`` (nb, n_grid) on ``grid`` (Hz)."""
     sigma, fn = np.exp(p[:, 0]), p[:, 1]
-    steady = (gain_factor(omega, np.exp(p[:, 2]), p[:, 3])
-              * continued_steady(omega, GRID_HZ, amp, sigma, fn))
+    steady = steady_response(omega, grid, amp, sigma, fn, np.exp(p[:, 2]), p[:, 3])
     return mode_response(t, omega, steady, sigma, fn)
 
 
-def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
+def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,
                 keep: NDArray, n_free: int = 4) -> NDArray:
     """Per run (log sigma, f_n, log g, 0) of the best grid point, gain in closed form (held
     at 1 when ``n_free`` = 2: only the mode is free)."""
@@ -214,7 +213,7 @@ def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
     for sigma in SIGMA_GRID:
         for fn in FN_GRID:
             p = np.tile([math.log(sigma), fn, 0.0, 0.0], (nb, 1))
-            y = _predict(t, omega, amp, p)
+            y = _predict(t, omega, amp, grid, p)
             yk, ek = y[:, keep], env[:, keep]
             g = np.maximum(np.sum(yk * ek, axis=1) / np.maximum(np.sum(yk * yk, axis=1),
                                                                   1e-30), 1e-6)
@@ -227,8 +226,8 @@ def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray,
     return out
 
 
-def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: NDArray,
-                 start: NDArray, max_nfev: int, n_free: int = 4) -> NDArray:
+def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,
+                 keep: NDArray, start: NDArray, max_nfev: int, n_free: int = 4) -> NDArray:
     """Per-run least-squares refinement of the grid start (every 4th sample) in its first
     ``n_free`` parameters (the rest held)."""
     from scipy.optimize import least_squares
@@ -242,7 +241,7 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: N
 
         def residual(x: NDArray, i: int = i, scale: float = scale) -> NDArray:
             p = np.concatenate([x, start[i, n_free:]])
-            y = _predict(t, omega[i:i + 1], amp[i:i + 1], p[None, :])[0]
+            y = _predict(t, omega[i:i + 1], amp[i:i + 1], grid, p[None, :])[0]
             return ((y - env[i]) / scale)[sub]
 
         x0 = np.clip(start[i], lo, hi)[:n_free]
@@ -251,13 +250,14 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, keep: N
     return out
 
 
-def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray], *,
-                max_nfev: int = 40, intercepts: Sequence[int] = (-1,), learn_gain: bool = True
-                ) -> tuple[dict[str, NDArray], dict[str, Any]]:
+def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
+                grid: NDArray, *, max_nfev: int = 40, intercepts: Sequence[int] = (-1,),
+                learn_gain: bool = True) -> tuple[dict[str, NDArray], dict[str, Any]]:
     """Weights (point -> (4, nf + 1)) of ``PARAMS`` over ``features`` (nb, nf + 1, intercept
-    last; ``intercepts``: the intercept columns, one per group) and a fit report: grid
-    start, per-run refinement, ridge regression across runs, joint refinement. Without
-    ``learn_gain`` the gain is 1 and its slope 0: the steady level is the harmonic model's."""
+    last; ``intercepts``: the intercept columns, one per group) from the harmonic amplitudes
+    ``amp`` (point -> (nb, n_grid) on ``grid``, Hz), and a fit report: grid start, per-run
+    refinement, ridge regression across runs, joint refinement. Without ``learn_gain`` the
+    gain is 1 and its slope 0: the steady level is the harmonic model's."""
     from scipy.optimize import least_squares
 
     weights, report = {}, {}
@@ -266,8 +266,8 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
     for j, point in enumerate(POINTS):
         t, omega, env, a, keep = _batch(runs, amp, j)
         n_free = len(PARAMS) if learn_gain else 2
-        start = _refine_runs(t, omega, env, a, keep, _grid_start(t, omega, env, a, keep,
-                                                                 n_free), max_nfev, n_free)
+        start = _refine_runs(t, omega, env, a, grid, keep,
+                             _grid_start(t, omega, env, a, grid, keep, n_free), max_nfev, n_free)
         w0 = np.linalg.solve(features.T @ features + ridge, features.T @ start).T  # (4, nf+1)
         w0[n_free:] = 0.0
         held = w0[n_free:].ravel()
@@ -277,14 +277,14 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
         def residual(w: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
                      sub=sub, held=held) -> NDArray:
             w = np.concatenate([w, held])
-            y = _predict(t, omega, a, features @ w.reshape(len(PARAMS), -1).T)
+            y = _predict(t, omega, a, grid, features @ w.reshape(len(PARAMS), -1).T)
             return ((y - env) / scale)[:, sub].ravel()
 
         r0 = residual(w0[:n_free].ravel())
 
         def residual_runs(p: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
                           sub=sub) -> NDArray:
-            return ((_predict(t, omega, a, p) - env) / scale)[:, sub]
+            return ((_predict(t, omega, a, grid, p) - env) / scale)[:, sub]
 
         sol = least_squares(residual, w0[:n_free].ravel(), method="trf", x_scale="jac",
                             max_nfev=max_nfev, diff_step=1e-4)
@@ -344,7 +344,7 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
                         max(r.design[k] for r in train_runs)] for k in MOTOR_INPUTS}
     max_v = max(float(np.max(np.abs(r.volts))) for r in runs)
     provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind,
-                   "feature_columns": cols, "grid_hz": GRID_HZ.tolist(),
+                   "feature_columns": cols, "grid_hz": harmonic_grid(predictor).tolist(),
                    "motor": {**fixed, "max_voltage_V": max(max_v,
                                                            motorlaw.DEFAULTS["max_voltage_V"])},
                    "motor_ranges": motor_ranges,
@@ -368,7 +368,7 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
             amp[p].append(a)
     n_groups = len(provisional.get("group_by", {"choices": [0]})["choices"])
     weights, report = fit_weights(train_runs, feats, {p: np.stack(v) for p, v in amp.items()},
-                                  max_nfev=max_nfev, intercepts=[
+                                  shell.grid_hz, max_nfev=max_nfev, intercepts=[
                                       (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)],
                                   learn_gain=learn_gain)
     params = np.concatenate([feats @ w.T for w in weights.values()])

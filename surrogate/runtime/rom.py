@@ -6,16 +6,18 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
 
 1. **Motor speed** omega(t), rad/s, from the voltage schedule by the one ERM law of
    :mod:`motorlaw` (the solver's own), solved exactly for the voltage held between samples.
-2. **Steady response at the instantaneous speed**: A(omega), um, the harmonic model (the NN of
-   ``models/nn-default``, shipped inside this model's directory as ``harmonic.onnx`` with its
-   card) of that design at f = omega / 2 pi, times a learned design gain g (the harmonic model
-   is trained on hysteretic damping, a finer mesh and a PML; the FE transients of
-   ``datasets/transient`` stand in for the hysteretic loss with the causal band model of
-   ``fem.viscoelastic``, its closest causal counterpart). The harmonic model covers
-   100-250 Hz (the gain may vary with frequency there: g exp(s (f - 130 Hz) / 50 Hz), s
-   learned too); below 100 Hz the response is continued with the unbalance force m e omega^2
-   through the identified mode: A(omega) = A(omega_100) (omega / omega_100)^2
-   |i omega_100 - lambda| / |i omega - lambda|.
+2. **Steady response at the instantaneous speed**: A(omega), um, the harmonic model (an NN
+   with a ``frequency_hz`` input, shipped inside this model's directory as ``harmonic.onnx``
+   with its card; ``models/rom-default`` carries ``models/nn-wide``, trained over the motor's
+   whole speed range, 20-250 Hz) of that design at f = omega / 2 pi, times a learned design
+   gain g (the harmonic model is trained on hysteretic damping, a finer mesh and a PML; the FE
+   transients of ``datasets/transient`` stand in for the hysteretic loss with the causal band
+   model of ``fem.viscoelastic``, its closest causal counterpart). The gain may vary over the
+   harmonic model's band [f_low, f_high]: g exp(s (f - 130 Hz) / 50 Hz), s learned too, f
+   clamped into the band. Below f_low (the first frequency of ``grid_hz``, the harmonic
+   model's lowest trained frequency) the response is continued with the unbalance force
+   m e omega^2 through the identified mode: A(omega) = A(omega_low) (omega / omega_low)^2
+   |i omega_low - lambda| / |i omega - lambda|.
 3. **Dynamic correction**: one damped mode lambda = -sigma + i 2 pi f_n per point (unit and
    tissue lag, the beat when the rotor passes the mode, the ring-down after switch-off), seen
    from the frame rotating with the force: ``dz/dt = (lambda - i omega) z + (i omega - lambda)
@@ -60,7 +62,7 @@ POINTS = ("center", "edge")
 STATES = ("center_envelope_um", "edge_envelope_um")
 PARAMS = ("log_sigma", "fn_hz", "log_gain", "gain_slope")
 F_REF_HZ, F_SPAN_HZ = 130.0, 50.0  # the gain slope is per 50 Hz about 130 Hz
-F_LOW_HZ = 100.0  # the harmonic model's lowest trained frequency
+GRID_STEP_HZ = 2.5  # the harmonic model is evaluated this finely and interpolated linearly
 MOTOR_INPUTS = ("tau_spinup_ms", "tau_spindown_ms")
 LOSS_INPUTS = ("tissue_loss_factor", "ring_loss_factor")  # hysteretic loss factors
 
@@ -109,21 +111,41 @@ def mode_response(t: NDArray, omega: NDArray, steady: NDArray, sigma: NDArray,
 def continued_steady(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
                      fn_hz: NDArray) -> NDArray:
     """Steady response (nb, nt) at the speeds ``omega`` ((nt,) or (nb, nt), rad/s) from the
-    harmonic amplitudes ``amplitude`` (nb, n_grid) on ``grid_hz`` (from 100 Hz), continued
-    below 100 Hz by m e omega^2 through the mode (see the module docstring)."""
+    harmonic amplitudes ``amplitude`` (nb, n_grid) on ``grid_hz`` (increasing, from the
+    harmonic model's lowest trained frequency f_low), continued below f_low by
+    m e omega^2 through the mode (see the module docstring)."""
     f = np.broadcast_to(omega, (amplitude.shape[0], np.shape(omega)[-1])) / (2 * math.pi)
     above = np.stack([np.interp(fi, grid_hz, a) for fi, a in zip(f, amplitude, strict=True)])
     lam = -np.asarray(sigma)[:, None] + 2j * math.pi * np.asarray(fn_hz)[:, None]
-    w100, w = 2 * math.pi * F_LOW_HZ, 2 * math.pi * f
-    below = (amplitude[:, :1] * (f / F_LOW_HZ) ** 2 * np.abs(1j * w100 - lam)
+    f_low = float(grid_hz[0])
+    w_low, w = 2 * math.pi * f_low, 2 * math.pi * f
+    below = (amplitude[:, :1] * (f / f_low) ** 2 * np.abs(1j * w_low - lam)
              / np.abs(1j * w - lam))
-    return np.where(f >= F_LOW_HZ, above, below)
+    return np.where(f >= f_low, above, below)
 
 
-def gain_factor(omega: NDArray, gain: NDArray, slope: NDArray) -> NDArray:
-    """Learned steady gain (nb, nt): g exp(slope (f - 130 Hz) / 50 Hz), f clamped at >= 100 Hz
-    (below, the continuation through the mode carries the frequency dependence)."""
-    f = np.maximum(np.asarray(omega) / (2 * math.pi), F_LOW_HZ)
+def harmonic_grid(harmonic: Predictor) -> NDArray:
+    """Frequencies (Hz) at which the envelope model evaluates its harmonic model: its trained
+    ``frequency_hz`` range every ``GRID_STEP_HZ``."""
+    spec = next(s for s in harmonic.specs if s.name == "frequency_hz")
+    return np.arange(float(spec.low), float(spec.high) + 1e-9, GRID_STEP_HZ)
+
+
+def steady_response(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
+                    fn_hz: NDArray, gain: NDArray, slope: NDArray) -> NDArray:
+    """The model's steady response (nb, nt) at the speeds ``omega``: the learned gain times
+    the harmonic amplitudes continued below the band (:func:`gain_factor`,
+    :func:`continued_steady`; per-batch parameters ``sigma`` 1/s, ``fn_hz`` Hz, ``gain``,
+    ``slope``, each (nb,))."""
+    return (gain_factor(omega, gain, slope, grid_hz)
+            * continued_steady(omega, grid_hz, amplitude, sigma, fn_hz))
+
+
+def gain_factor(omega: NDArray, gain: NDArray, slope: NDArray, grid_hz: NDArray) -> NDArray:
+    """Learned steady gain (nb, nt): g exp(slope (f - 130 Hz) / 50 Hz), f clamped into the
+    harmonic model's band ``grid_hz`` (below it, the continuation through the mode carries
+    the frequency dependence)."""
+    f = np.clip(np.asarray(omega) / (2 * math.pi), grid_hz[0], grid_hz[-1])
     return np.asarray(gain)[:, None] * np.exp(np.asarray(slope)[:, None]
                                               * (f - F_REF_HZ) / F_SPAN_HZ)
 
@@ -139,7 +161,7 @@ class EnvelopeModel:
             design features.
         motor: the actuator's drive law, a speed law (time constants are design inputs).
         motor_ranges: trained ranges of the motor time constants, ms.
-        grid_hz: frequencies (Hz) the harmonic model is evaluated at, from 100 Hz.
+        grid_hz: frequencies (Hz) the harmonic model is evaluated at, over its trained band.
         clip: parameter -> (low, high), the trained spread of each mode parameter.
         meta: the coefficients' remaining keys (format, provenance).
     """
@@ -190,7 +212,7 @@ class EnvelopeModel:
         """Encoded design features (n_features + 1,) with the intercept last; with
         ``group_by`` one such block per choice of that input, zero except the design's."""
         X = {k: [design[k]] for k in self.design_names}
-        X["frequency_hz"] = [F_LOW_HZ]
+        X["frequency_hz"] = [float(self.grid_hz[0])]
         try:
             _, feats, _ = self.harmonic.features(X, extrapolate=extrapolate)
         except PredictorInputError as err:
@@ -229,6 +251,19 @@ class EnvelopeModel:
         out = self.harmonic.predict(X, extrapolate=extrapolate or ref is not None)
         return {p: out[f"{p}_amplitude_um"] for p in POINTS}
 
+    def steady_levels(self, omega: Any, design: Mapping[str, Any], *,
+                      extrapolate: bool = False) -> dict[str, NDArray]:
+        """point -> the model's steady envelope (um) at the speeds ``omega`` (rad/s, any
+        shape (n,)): what the envelope tends to while the speed is held (the learned gain times
+        the harmonic response, continued below its band; :func:`steady_response`)."""
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        par = self.parameters(design, extrapolate=extrapolate)
+        amp = self.steady_amplitudes(design, extrapolate=extrapolate)
+        return {p: steady_response(w, self.grid_hz, amp[p][None, :],
+                                   np.array([par[p]["sigma_1_s"]]), np.array([par[p]["fn_hz"]]),
+                                   np.array([par[p]["gain"]]),
+                                   np.array([par[p]["gain_slope"]]))[0] for p in POINTS}
+
     def simulate(self, t_s: Any, volts: Any, design: Mapping[str, Any], *,
                  extrapolate: bool = False) -> dict[str, NDArray]:
         """Envelopes (um) at the times ``t_s`` (s, increasing, from rest) for the drive
@@ -241,14 +276,12 @@ class EnvelopeModel:
         omega = motor_speed(t, v, dsg["tau_spinup_ms"] * 1e-3, dsg["tau_spindown_ms"] * 1e-3,
                             self.motor)
         par = self.parameters(dsg, extrapolate=extrapolate)
-        amp = self.steady_amplitudes(dsg, extrapolate=extrapolate)
+        steady = self.steady_levels(omega, dsg, extrapolate=extrapolate)
         out: dict[str, NDArray] = {}
         for point, name in zip(POINTS, STATES, strict=True):
             p = par[point]
-            sig, fn = np.array([p["sigma_1_s"]]), np.array([p["fn_hz"]])
-            steady = (gain_factor(omega, np.array([p["gain"]]), np.array([p["gain_slope"]]))
-                      * continued_steady(omega, self.grid_hz, amp[point][None, :], sig, fn))
-            env = mode_response(t, omega, steady, sig, fn)[0]
+            env = mode_response(t, omega, steady[point][None, :], np.array([p["sigma_1_s"]]),
+                                np.array([p["fn_hz"]]))[0]
             if not np.all(np.isfinite(env)):
                 raise RomBlowUpError("the envelope is not finite (corrupt coefficients?)")
             out[name] = env
@@ -326,8 +359,11 @@ def model_from_parts(coefficients: Mapping[str, Any], harmonic_card: dict[str, A
     if set(clip) != set(PARAMS):
         raise ValueError(f"clip: need bounds for {list(PARAMS)}")
     grid = np.asarray(coefficients["grid_hz"], dtype=float)
-    if grid.ndim != 1 or grid.size < 2 or grid[0] != F_LOW_HZ or np.any(np.diff(grid) <= 0):
-        raise ValueError(f"grid_hz: need increasing frequencies from {F_LOW_HZ} Hz")
+    band = harmonic_grid(harmonic)
+    if (grid.ndim != 1 or grid.size < 2 or not math.isclose(grid[0], band[0])
+            or grid[-1] > band[-1] + 1e-9 or np.any(np.diff(grid) <= 0)):
+        raise ValueError(f"grid_hz: need increasing frequencies from the harmonic model's "
+                         f"lowest trained frequency {band[0]:g} Hz to at most {band[-1]:g} Hz")
     ranges = coefficients["motor_ranges"]
     if not isinstance(ranges, Mapping) or set(ranges) != set(MOTOR_INPUTS) or not all(
             len(ranges[k]) == 2 and all(np.isfinite(np.asarray(ranges[k], dtype=float)))

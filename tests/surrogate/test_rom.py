@@ -19,6 +19,7 @@ from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     RomInputError,
     continued_steady,
+    gain_factor,
     load_envelope_model,
     mode_response,
     motor_speed,
@@ -82,18 +83,31 @@ def test_mode_matches_a_fine_ode_solution_and_converges_in_the_step():
     assert errs[0] > errs[1] > errs[2] > errs[3]  # converges as the step shrinks
 
 
-def test_continuation_below_100_hz_is_continuous_and_scales_with_the_force():
-    grid = np.arange(100.0, 250.1, 2.5)
-    amp = (2.0 + 0.01 * (grid - 100.0))[None]
-    f = np.array([5.0, 10.0, 99.999, 100.0, 130.0])
+@pytest.mark.parametrize("f_low", [100.0, 20.0])
+def test_continuation_below_the_band_is_continuous_and_scales_with_the_force(f_low):
+    """Below the harmonic model's band (its first grid frequency: 100 Hz for a model trained
+    on 100-250 Hz, 20 Hz for one trained over the motor's whole range) the response is the
+    band's first amplitude carried by m e omega^2 through the mode; inside, interpolated."""
+    grid = np.arange(f_low, 250.1, 2.5)
+    amp = (2.0 + 0.01 * (grid - f_low))[None]
+    f = np.array([0.05 * f_low, 0.1 * f_low, f_low - 1e-3, f_low, f_low + 30.0])
     out = continued_steady(2 * math.pi * f, grid, amp, np.array([2000.0]), np.array([400.0]))[0]
     assert out[2] == pytest.approx(out[3], rel=1e-4)
     assert out[4] == pytest.approx(2.3)
-    # below 100 Hz: the unbalance force m e omega^2 through the mode's frequency response
+    # below the band: the unbalance force m e omega^2 through the mode's frequency response
     lam = complex(-2000.0, 2 * math.pi * 400.0)
-    w5, w10 = 2 * math.pi * 5.0, 2 * math.pi * 10.0
-    assert out[1] / out[0] == pytest.approx(4.0 * abs(1j * w5 - lam) / abs(1j * w10 - lam),
+    w1, w2 = 2 * math.pi * f[0], 2 * math.pi * f[1]
+    assert out[1] / out[0] == pytest.approx(4.0 * abs(1j * w1 - lam) / abs(1j * w2 - lam),
                                             rel=1e-9)
+
+
+def test_the_learned_gain_varies_inside_the_band_only():
+    """g exp(s (f - 130 Hz) / 50 Hz) with f clamped into the harmonic band."""
+    grid = np.arange(20.0, 250.1, 2.5)
+    f = np.array([5.0, 20.0, 130.0, 250.0, 400.0])
+    g = gain_factor(2 * math.pi * f, np.array([1.5]), np.array([0.4]), grid)[0]
+    expected = 1.5 * np.exp(0.4 * (np.clip(f, 20.0, 250.0) - 130.0) / 50.0)
+    np.testing.assert_allclose(g, expected, rtol=1e-12)
 
 
 # --------------------------------------------------------------------------- metrics
@@ -240,13 +254,13 @@ def test_identification_recovers_a_known_mode(model):
     runs, amps = [], []
     for volts in schedules:
         w = motor_speed(t, volts, 0.02, 0.035, MOTOR)
-        env = np.stack([rom._predict(t, w[None], amp[p][None], truth[None])[0]
+        env = np.stack([rom._predict(t, w[None], amp[p][None], model.grid_hz, truth[None])[0]
                         for p in ("center", "edge")])
         runs.append(rom.Run(t, volts, w, env, dict(DESIGN), len(runs), 0.06))
         amps.append(amp)
     feats = np.ones((len(runs), 1))
     weights, report = rom.fit_weights(runs, feats, {p: np.stack([a[p] for a in amps])
-                                                    for p in ("center", "edge")})
+                                                    for p in ("center", "edge")}, model.grid_hz)
     for point in ("center", "edge"):
         w = weights[point][:, 0]
         assert math.exp(w[0]) == pytest.approx(70.0, rel=0.02)

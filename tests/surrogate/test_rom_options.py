@@ -35,7 +35,8 @@ def _synthetic_runs(model, truths):
     for truth in truths:
         for volts in schedules:
             w = motor_speed(t, volts, 0.02, 0.035, MOTOR)
-            env = np.stack([rom._predict(t, w[None], amp[p][None], np.asarray(truth)[None])[0]
+            env = np.stack([rom._predict(t, w[None], amp[p][None], model.grid_hz,
+                                         np.asarray(truth)[None])[0]
                             for p in ("center", "edge")])
             runs.append(rom.Run(t, volts, w, env, dict(DESIGN), len(runs), 0.06))
             amps.append(amp)
@@ -47,7 +48,8 @@ def test_without_a_learned_gain_the_mode_is_identified_and_the_gain_stays_one(mo
 
     truth = [math.log(70.0), 48.0, 0.0, 0.0]
     runs, amps = _synthetic_runs(model, [truth])
-    weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, learn_gain=False)
+    weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, model.grid_hz,
+                                      learn_gain=False)
     for point in ("center", "edge"):
         w = weights[point][:, 0]
         assert math.exp(w[0]) == pytest.approx(70.0, rel=0.02)
@@ -64,7 +66,8 @@ def test_one_mode_map_per_group_identifies_two_different_modes(model):
     truths = [[math.log(60.0), 45.0, 0.0, 0.0], [math.log(150.0), 80.0, 0.0, 0.0]]
     runs, amps = _synthetic_runs(model, truths)
     feats = np.kron(np.repeat(np.eye(2), 3, axis=0), np.ones((1, 1)))  # (6 runs, 2 blocks)
-    weights, _ = rom.fit_weights(runs, feats, amps, intercepts=[0, 1], learn_gain=False)
+    weights, _ = rom.fit_weights(runs, feats, amps, model.grid_hz, intercepts=[0, 1],
+                                 learn_gain=False)
     for point in ("center", "edge"):
         for j, truth in enumerate(truths):
             assert math.exp(weights[point][0, j]) == pytest.approx(math.exp(truth[0]),
