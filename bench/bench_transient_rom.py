@@ -134,12 +134,13 @@ def compare(name: str, frequency_hz: float, *, point: str = "center",
             "fe_solves": fe_resp.solves, "fe_solve_s": fe_resp.solve_s}
 
 
-def beyond_reach(frequency_hz: float = 200.0) -> str:
+def beyond_reach(frequency_hz: float = 200.0,
+                 model_path: str | Path = ROOT / "models" / "rom-default") -> str:
     """What the plan's timing says for a frequency the motor cannot reach."""
     from planner.timing import TimingError, voltage_for_frequency
     from surrogate.runtime.rom import load_envelope_model
 
-    model = load_envelope_model(ROOT / "models" / "rom-default")
+    model = load_envelope_model(model_path)
     try:
         voltage_for_frequency(model.motor, frequency_hz)
     except TimingError as err:
@@ -205,7 +206,7 @@ def held_out_groups(model: str | Path = ROOT / "models" / "rom-default",
                     ) -> dict[str, dict[str, float]]:
     """The card's held-out summary (``surrogate.rom_metrics.summarise``: medians and maxima)
     recomputed on groups of its runs: per attachment and with the first burst's drive speed
-    below / at or above 100 Hz (the harmonic NN's lowest trained frequency)."""
+    below / at or above 100 Hz (the lowest frequency of the default harmonic data)."""
     from surrogate.data.store import Store
     from surrogate.rom_metrics import summarise
 
@@ -318,6 +319,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--frequency", type=float, default=130.0, help="plan frequency, Hz")
     ap.add_argument("--designs", nargs="*", default=list(DESIGNS), choices=list(DESIGNS))
+    ap.add_argument("--model", default=str(ROOT / "models" / "rom-default"),
+                    help="envelope model directory (default: the shipped models/rom-default)")
     ap.add_argument("--json", help="write the results to this file")
     ap.add_argument("--check-step", action="store_true",
                     help="only check the dataset's 0.25 ms step against 0.1 ms (3 rows)")
@@ -338,14 +341,14 @@ def main(argv: list[str] | None = None) -> int:
             print(f"median {k} {np.median([r[k] for r in rows]):.4f}")
         return 0
     if args.held_out:
-        card = json.loads((ROOT / "models" / "rom-default" / "card.json").read_text())
+        card = json.loads((Path(args.model) / "card.json").read_text())
         held, targets = card["metrics"]["held_out"]["summary"], card["targets"]
         for k, v in held.items():  # every target metric, centre and edge, against its target
             target = targets.get(k.split("_", 1)[1])
             print(f"{k} {v:.4g}" + ("" if target is None else f"  (target < {target:g})"))
         keys = ("steady_rel_err", "steady_rel_err_settled", "rise_abs_err_ms",
                 "decay_abs_err_ms", "nrmse")
-        for name, summ in held_out_groups().items():
+        for name, summ in held_out_groups(args.model).items():
             for p in ("center", "edge"):
                 print(f"{name} {p}: " + "  ".join(
                     f"{k} {summ[f'{p}_{k}_median']:.3g} / {summ[f'{p}_{k}_max']:.3g}"
@@ -358,14 +361,14 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     results = []
     for name in args.designs:
-        res = compare(name, args.frequency)
+        res = compare(name, args.frequency, model_path=args.model)
         results.append(res)
         print(f"{name} at {args.frequency:g} Hz ({res['fe_solves']} FE solves, "
               f"{res['fe_solve_s']:.0f} s)")
         for k, r in res["keys"].items():
             print(f"  {k:14s} plan {r['plan']:8.2f}  FE {r['fe']:8.2f}  diff {r['diff']:+7.2f} ms"
                   f"  {'ok' if r['within'] else 'OUTSIDE 1 ms / 5 %'}")
-    print(f"200 Hz: {beyond_reach(200.0)}")
+    print(f"200 Hz: {beyond_reach(200.0, args.model)}")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1) + "\n")
     return 0

@@ -21,13 +21,16 @@ window (f = omega / 2 pi):
   lag behind a still-rising speed) and time-stepping error, not a model error;
 - ``hyst``: the same matrices with hysteretic damping K (1 + i eta) instead (the harmonic
   solver's damping model, the reference): ``own_vs_hyst`` is the damping model alone;
-- ``nn``: the harmonic NN (``models/nn-default``, quadratic elements, PML, hysteretic) at f
-  (extrapolated below its 100 Hz): ``nn_vs_hyst`` is the NN's error plus element order and PML;
+- ``nn``: the harmonic NN of the default band (``models/nn-default``, 100-250 Hz, quadratic
+  elements, PML, hysteretic) at f (extrapolated below its 100 Hz; the previous envelope
+  model's steady part): ``nn_vs_hyst`` is that NN's error plus element order and PML;
 - ``nn_eq`` (viscous transients only): the NN with each loss factor replaced by the
   transient's equivalent at f, eta f / f_ref;
 - ``model``: the envelope model's own steady level at f (``--model``, default
-  ``models/rom-default``: its learned gain x the harmonic model, continued below 100 Hz);
-  ``model_vs_own`` is the model's steady error with the window's unsteadiness removed;
+  ``models/rom-default``: its harmonic model, ``models/nn-wide`` over 20-250 Hz for the
+  shipped one, times its learned gain if it has one, continued below the harmonic band);
+  ``model_vs_hyst`` is its harmonic part's error plus element order and PML (without a learned
+  gain), ``model_vs_own`` the model's steady error with the window's unsteadiness removed;
   ``tone_vs_own`` is what is not steady in the FE window (and time-stepping error) without the
   demodulation's error.
 
@@ -51,7 +54,7 @@ sys.path.insert(0, str(ROOT))
 
 KINDS = ("tone", "own", "hyst", "nn", "nn_eq", "model")  # nn_eq: viscous transients only
 PAIRS = (("tone", "own"), ("own", "hyst"), ("nn", "hyst"), ("nn", "own"), ("nn_eq", "own"),
-         ("model", "own"))
+         ("model", "hyst"), ("model", "own"))
 
 
 def steady_solves(scene_json: str, omega: float, band: bool = False,

@@ -5,9 +5,11 @@ Training data: datasets generated from ``datasets/spaces/transient.toml`` (rows 
 meridian, the resolved scene with its voltage schedule and motor, and the design columns of
 the harmonic model). Nothing here imports the solver: it fits from stored rows only.
 
-What is fitted (everything else is known): per point (center, edge) the mode (log sigma, f_n),
-the log gain g and its frequency slope, each affine in the harmonic model's encoded design features
-(one map per attachment by default, ``group_by_attachment``):
+What is fitted (everything else is known): per point (center, edge) the mode (log sigma, f_n)
+and, with ``learn_gain``, a log gain g and its frequency slope on top of the harmonic model
+(by default ``models/nn-wide``, over the motor's whole speed range; no gain: chosen by
+measurement, docs/transient-model.md), each affine in the harmonic model's encoded design
+features (one map per attachment by default, ``group_by_attachment``):
 
 1. FE envelopes: each displacement component is demodulated with the rotor angle phi (exact,
    :mod:`motorlaw`): z_c = analytic(u_c) e^{-i phi}; the point's envelope is
@@ -312,15 +314,17 @@ def _feature_columns(harmonic: Any) -> list[int]:
 
 
 def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
-          "models/nn-default", seed: int = 0, overwrite: bool = False,
+          "models/nn-wide", seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
-          group_by_attachment: bool = True, learn_gain: bool = True) -> dict[str, Any]:
+          group_by_attachment: bool = True, learn_gain: bool = False) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
     bounds the least-squares evaluations of each refinement; ``seed`` is recorded (the fit is
     deterministic). ``equivalent_loss``: evaluate the harmonic model with the FE transient's
-    damping, each loss factor eta as eta f / f_rated (see docs/transient-model.md)."""
+    damping, each loss factor eta as eta f / f_rated (see docs/transient-model.md).
+    ``learn_gain``: fit a gain g exp(s (f - 130 Hz) / 50 Hz) on the harmonic model's level
+    (off by default: the harmonic model's own level is the steady state)."""
     out = Path(out)
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, int) or not 1 <= max_nfev <= 1000:
