@@ -17,7 +17,7 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
    clamped into the band. Below f_low (the first frequency of ``grid_hz``, the harmonic
    model's lowest trained frequency) the response is continued with the unbalance force
    m e omega^2 through the identified mode: A(omega) = A(omega_low) (omega / omega_low)^2
-   |i omega_low - lambda| / |i omega - lambda|.
+   |i omega_low - lambda| / |i omega - lambda| (:mod:`surrogate.runtime.rom_steady`).
 3. **Dynamic correction**: one damped mode lambda = -sigma + i 2 pi f_n per point (unit and
    tissue lag, the beat when the rotor passes the mode, the ring-down after switch-off), seen
    from the frame rotating with the force: ``dz/dt = (lambda - i omega) z + (i omega - lambda)
@@ -58,16 +58,21 @@ from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_mo
 from surrogate.runtime.encoding import PredictorInputError, n_features
 from surrogate.runtime.predictor import Predictor, make_session
 from surrogate.runtime.rom_modes import PARAMS, envelope_from_params, mode_response, params_for
+from surrogate.runtime.rom_steady import (
+    continued_steady,
+    gain_factor,
+    harmonic_grid,
+    steady_response,
+)
 
 __all__ = ["FORMAT", "PARAMS", "POINTS", "STATES", "EnvelopeModel", "RomBlowUpError",
-           "RomInputError", "load_envelope_model", "mode_response", "model_from_parts",
-           "motor_speed"]
+           "RomInputError", "continued_steady", "gain_factor", "harmonic_grid",
+           "load_envelope_model", "mode_response", "model_from_parts", "motor_speed",
+           "steady_response"]
 
 FORMAT = "hapticrom-envelope-rom/2"
 POINTS = ("center", "edge")
 STATES = ("center_envelope_um", "edge_envelope_um")
-F_REF_HZ, F_SPAN_HZ = 130.0, 50.0  # the gain slope is per 50 Hz about 130 Hz
-GRID_STEP_HZ = 2.5  # the harmonic model is evaluated this finely and interpolated linearly
 MOTOR_INPUTS = ("tau_spinup_ms", "tau_spindown_ms")
 LOSS_INPUTS = ("tissue_loss_factor", "ring_loss_factor")  # hysteretic loss factors
 
@@ -90,48 +95,6 @@ def motor_speed(t_s: NDArray, volts: NDArray, tau_up_s: float, tau_down_s: float
     constants."""
     law = replace(motor, tau_spinup_s=tau_up_s, tau_spindown_s=tau_down_s)
     return held_speed_and_phase(law, t_s, volts)[0]
-
-
-def continued_steady(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
-                     fn_hz: NDArray) -> NDArray:
-    """Steady response (nb, nt) at the speeds ``omega`` ((nt,) or (nb, nt), rad/s) from the
-    harmonic amplitudes ``amplitude`` (nb, n_grid) on ``grid_hz`` (increasing, from the
-    harmonic model's lowest trained frequency f_low), continued below f_low by
-    m e omega^2 through the mode (see the module docstring)."""
-    f = np.broadcast_to(omega, (amplitude.shape[0], np.shape(omega)[-1])) / (2 * math.pi)
-    above = np.stack([np.interp(fi, grid_hz, a) for fi, a in zip(f, amplitude, strict=True)])
-    lam = -np.asarray(sigma)[:, None] + 2j * math.pi * np.asarray(fn_hz)[:, None]
-    f_low = float(grid_hz[0])
-    w_low, w = 2 * math.pi * f_low, 2 * math.pi * f
-    below = (amplitude[:, :1] * (f / f_low) ** 2 * np.abs(1j * w_low - lam)
-             / np.abs(1j * w - lam))
-    return np.where(f >= f_low, above, below)
-
-
-def harmonic_grid(harmonic: Predictor) -> NDArray:
-    """Frequencies (Hz) at which the envelope model evaluates its harmonic model: its trained
-    ``frequency_hz`` range every ``GRID_STEP_HZ``."""
-    spec = next(s for s in harmonic.specs if s.name == "frequency_hz")
-    return np.arange(float(spec.low), float(spec.high) + 1e-9, GRID_STEP_HZ)
-
-
-def steady_response(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
-                    fn_hz: NDArray, gain: NDArray, slope: NDArray) -> NDArray:
-    """The model's steady response (nb, nt) at the speeds ``omega``: the learned gain times
-    the harmonic amplitudes continued below the band (:func:`gain_factor`,
-    :func:`continued_steady`; per-batch parameters ``sigma`` 1/s, ``fn_hz`` Hz, ``gain``,
-    ``slope``, each (nb,))."""
-    return (gain_factor(omega, gain, slope, grid_hz)
-            * continued_steady(omega, grid_hz, amplitude, sigma, fn_hz))
-
-
-def gain_factor(omega: NDArray, gain: NDArray, slope: NDArray, grid_hz: NDArray) -> NDArray:
-    """Learned steady gain (nb, nt): g exp(slope (f - 130 Hz) / 50 Hz), f clamped into the
-    harmonic model's band ``grid_hz`` (below it, the continuation through the mode carries
-    the frequency dependence)."""
-    f = np.clip(np.asarray(omega) / (2 * math.pi), grid_hz[0], grid_hz[-1])
-    return np.asarray(gain)[:, None] * np.exp(np.asarray(slope)[:, None]
-                                              * (f - F_REF_HZ) / F_SPAN_HZ)
 
 
 @dataclass(frozen=True)
