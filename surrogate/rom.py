@@ -57,10 +57,10 @@ from surrogate.runtime.rom import (
     PARAMS,
     POINTS,
     harmonic_grid,
-    mode_response,
     model_from_parts,
     steady_response,
 )
+from surrogate.runtime.rom_modes import envelope_from_params, params_for
 
 __all__ = ["Run", "complex_envelopes", "fit_weights", "load_runs", "train"]
 
@@ -68,6 +68,13 @@ EDGE_TRIM_S = 3e-3  # the Hilbert transform is least accurate within ~1 period o
 SIGMA_GRID = np.geomspace(10.0, 800.0, 9)  # 1/s
 FN_GRID = np.arange(20.0, 201.0, 10.0)  # Hz
 RIDGE = 1e-2
+# starts of the second mode about a run's one-mode fit (sigma, f_n): mode 1 sped up by
+# FAST_FACTOR, mode 2 slower by SLOW_FACTOR at FN2_FACTOR f_n, mode 1's share w
+FAST_FACTOR, SLOW_FACTOR, FN2_FACTOR = (1.0, 2.0), (0.15, 0.4), (0.7, 1.0)
+SHARE_START = (0.5, 0.75, 0.95)
+# per-run bounds of the parameters (PARAMS, then MODE2_PARAMS)
+LOWER = (math.log(2.0), 5.0, -4.0, -4.0, math.log(2.0), 5.0, -3.0)
+UPPER = (math.log(5000.0), 400.0, 4.0, 4.0, math.log(5000.0), 400.0, 3.0)
 
 
 @dataclass(frozen=True)
@@ -198,11 +205,12 @@ def _batch(runs: Sequence[Run], amp: dict[str, NDArray], point: int
 
 
 def _predict(t: NDArray, omega: NDArray, amp: NDArray, grid: NDArray, p: NDArray) -> NDArray:
-    """Model envelopes (nb, nt) for parameter rows p (nb, 4) in ``PARAMS`` order, harmonic
+    """Model envelopes (nb, nt) for parameter rows p (nb, 4) in ``PARAMS`` order (or (nb, 7)
+    with the second mode's rows, :func:`surrogate.runtime.rom_modes.params_for`), harmonic
     amplitudes ``amp`` (nb, n_grid) on ``grid`` (Hz)."""
     sigma, fn = np.exp(p[:, 0]), p[:, 1]
     steady = steady_response(omega, grid, amp, sigma, fn, np.exp(p[:, 2]), p[:, 3])
-    return mode_response(t, omega, steady, sigma, fn)
+    return envelope_from_params(t, omega, steady, p)
 
 
 def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,
@@ -228,69 +236,110 @@ def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: ND
     return out
 
 
+def _second_mode_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,
+                       keep: NDArray, one: NDArray) -> NDArray:
+    """Per run the best two-mode start (nb, 7) about its one-mode fit ``one`` (nb, 4): the
+    one mode kept or sped up (``FAST_FACTOR``), a slower second mode (``SLOW_FACTOR``,
+    ``FN2_FACTOR``) and mode 1's share w (``SHARE_START``), every combination evaluated on
+    the whole batch at once."""
+    nb = env.shape[0]
+    best = np.full(nb, np.inf)
+    out = np.zeros((nb, len(params_for(2))))
+    for fast in FAST_FACTOR:
+        for slow in SLOW_FACTOR:
+            for f2 in FN2_FACTOR:
+                for share in SHARE_START:
+                    p = np.column_stack([one[:, 0] + math.log(fast), one[:, 1:],
+                                         one[:, 0] + math.log(slow), f2 * one[:, 1],
+                                         np.full(nb, share)])
+                    p = np.clip(p, LOWER, UPPER)
+                    y = _predict(t, omega, amp, grid, p)
+                    err = np.sum((y[:, keep] - env[:, keep]) ** 2, axis=1)
+                    better = err < best
+                    best[better] = err[better]
+                    out[better] = p[better]
+    return out
+
+
 def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,
-                 keep: NDArray, start: NDArray, max_nfev: int, n_free: int = 4) -> NDArray:
-    """Per-run least-squares refinement of the grid start (every 4th sample) in its first
-    ``n_free`` parameters (the rest held)."""
+                 keep: NDArray, start: NDArray, max_nfev: int, free: Sequence[int]) -> NDArray:
+    """Per-run least-squares refinement of the start (nb, 4 or 7; every 4th sample) in its
+    parameters ``free`` (column indices; the rest held)."""
     from scipy.optimize import least_squares
 
     sub = keep & (np.arange(t.size) % 4 == 0)
     out = start.copy()
-    lo = [math.log(2.0), 5.0, -4.0, -4.0]
-    hi = [math.log(5000.0), 400.0, 4.0, 4.0]
+    free = list(free)
+    n = start.shape[1]
+    lo, hi = np.array(LOWER[:n])[free], np.array(UPPER[:n])[free]
     for i in range(env.shape[0]):
         scale = float(np.max(env[i]))
 
         def residual(x: NDArray, i: int = i, scale: float = scale) -> NDArray:
-            p = np.concatenate([x, start[i, n_free:]])
+            p = start[i].copy()
+            p[free] = x
             y = _predict(t, omega[i:i + 1], amp[i:i + 1], grid, p[None, :])[0]
             return ((y - env[i]) / scale)[sub]
 
-        x0 = np.clip(start[i], lo, hi)[:n_free]
-        out[i, :n_free] = least_squares(residual, x0, bounds=(lo[:n_free], hi[:n_free]),
-                                        max_nfev=max_nfev).x
+        x0 = np.clip(start[i, free], lo, hi)
+        out[i, free] = least_squares(residual, x0, bounds=(lo, hi), max_nfev=max_nfev).x
     return out
 
 
 def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
                 grid: NDArray, *, max_nfev: int = 40, intercepts: Sequence[int] = (-1,),
-                learn_gain: bool = True) -> tuple[dict[str, NDArray], dict[str, Any]]:
-    """Weights (point -> (4, nf + 1)) of ``PARAMS`` over ``features`` (nb, nf + 1, intercept
-    last; ``intercepts``: the intercept columns, one per group) from the harmonic amplitudes
-    ``amp`` (point -> (nb, n_grid) on ``grid``, Hz), and a fit report: grid start, per-run
-    refinement, ridge regression across runs, joint refinement. Without ``learn_gain`` the
-    gain is 1 and its slope 0: the steady level is the harmonic model's."""
+                learn_gain: bool = True, modes: int = 1
+                ) -> tuple[dict[str, NDArray], dict[str, Any]]:
+    """Weights (point -> (n_params, nf + 1)) of ``params_for(modes)`` over ``features``
+    (nb, nf + 1, intercept last; ``intercepts``: the intercept columns, one per group) from
+    the harmonic amplitudes ``amp`` (point -> (nb, n_grid) on ``grid``, Hz), and a fit
+    report: grid start, per-run refinement, ridge regression across runs, joint refinement.
+    Without ``learn_gain`` the gain is 1 and its slope 0: the steady level is the harmonic
+    model's. With ``modes`` = 2 the per-run one-mode fit starts the second mode
+    (:func:`_second_mode_start`), refined per run before the ridge regression."""
     from scipy.optimize import least_squares
 
+    params = params_for(modes)
     weights, report = {}, {}
     ridge = RIDGE * np.eye(features.shape[1])
     ridge[list(intercepts), list(intercepts)] = 0.0  # intercepts are not shrunk
     for j, point in enumerate(POINTS):
         t, omega, env, a, keep = _batch(runs, amp, j)
-        n_free = len(PARAMS) if learn_gain else 2
+        free = [0, 1, 2, 3] if learn_gain else [0, 1]
         start = _refine_runs(t, omega, env, a, grid, keep,
-                             _grid_start(t, omega, env, a, grid, keep, n_free), max_nfev, n_free)
-        w0 = np.linalg.solve(features.T @ features + ridge, features.T @ start).T  # (4, nf+1)
-        w0[n_free:] = 0.0
-        held = w0[n_free:].ravel()
+                             _grid_start(t, omega, env, a, grid, keep, len(free)), max_nfev,
+                             free)
+        if modes == 2:
+            free += [4, 5, 6]
+            start = _refine_runs(t, omega, env, a, grid, keep,
+                                 _second_mode_start(t, omega, env, a, grid, keep, start),
+                                 max_nfev, free)
+        w0 = np.linalg.solve(features.T @ features + ridge, features.T @ start).T  # (np, nf+1)
+        fixed = [k for k in range(len(params)) if k not in free]
+        w0[fixed] = 0.0  # gain rows held: log g = 0, slope 0
+
+        def full(w: NDArray, w0=w0, free=free) -> NDArray:
+            out = w0.copy()
+            out[free] = w.reshape(len(free), -1)
+            return out
+
         scale = np.max(env, axis=1, keepdims=True)
         sub = keep & (np.arange(t.size) % 4 == 0)
 
         def residual(w: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
-                     sub=sub, held=held) -> NDArray:
-            w = np.concatenate([w, held])
-            y = _predict(t, omega, a, grid, features @ w.reshape(len(PARAMS), -1).T)
+                     sub=sub) -> NDArray:
+            y = _predict(t, omega, a, grid, features @ full(w).T)
             return ((y - env) / scale)[:, sub].ravel()
 
-        r0 = residual(w0[:n_free].ravel())
+        r0 = residual(w0[free].ravel())
 
         def residual_runs(p: NDArray, t=t, omega=omega, a=a, env=env, scale=scale,
                           sub=sub) -> NDArray:
             return ((_predict(t, omega, a, grid, p) - env) / scale)[:, sub]
 
-        sol = least_squares(residual, w0[:n_free].ravel(), method="trf", x_scale="jac",
+        sol = least_squares(residual, w0[free].ravel(), method="trf", x_scale="jac",
                             max_nfev=max_nfev, diff_step=1e-4)
-        weights[point] = np.concatenate([sol.x, held]).reshape(len(PARAMS), -1)
+        weights[point] = full(sol.x)
         per_run = np.sqrt(np.mean(residual_runs(start) ** 2))
         report[point] = {"per_run_optimum_rms": float(per_run),
                          "regression_start_rms": float(np.sqrt(np.mean(r0 ** 2))),
@@ -316,7 +365,8 @@ def _feature_columns(harmonic: Any) -> list[int]:
 def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
           "models/nn-wide", seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
-          group_by_attachment: bool = True, learn_gain: bool = False) -> dict[str, Any]:
+          group_by_attachment: bool = True, learn_gain: bool = False,
+          modes: int = 1) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
@@ -324,7 +374,9 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     deterministic). ``equivalent_loss``: evaluate the harmonic model with the FE transient's
     damping, each loss factor eta as eta f / f_rated (see docs/transient-model.md).
     ``learn_gain``: fit a gain g exp(s (f - 130 Hz) / 50 Hz) on the harmonic model's level
-    (off by default: the harmonic model's own level is the steady state)."""
+    (off by default: the harmonic model's own level is the steady state). ``modes``: damped
+    modes per point, 1 (default, chosen by measurement) or 2
+    (:mod:`surrogate.runtime.rom_modes`)."""
     out = Path(out)
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, int) or not 1 <= max_nfev <= 1000:
@@ -332,6 +384,9 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     if not all(isinstance(x, bool) for x in (equivalent_loss, group_by_attachment, learn_gain)):
         raise ValueError("equivalent_loss, group_by_attachment, learn_gain: allowed true or "
                          "false")
+    if type(modes) is not int or modes not in (1, 2):
+        raise ValueError(f"modes = {modes!r}: allowed 1 or 2 (damped modes per point)")
+    params = params_for(modes)
     hcard = read_card(harmonic)
     if hcard.get("kind") != "nn" or "frequency_hz" not in [i["name"] for i in hcard["inputs"]]:
         raise ValueError(f"harmonic: {harmonic} is not a harmonic NN model with frequency_hz")
@@ -347,18 +402,18 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     motor_ranges = {k: [min(r.design[k] for r in train_runs),
                         max(r.design[k] for r in train_runs)] for k in MOTOR_INPUTS}
     max_v = max(float(np.max(np.abs(r.volts))) for r in runs)
-    provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind,
+    provisional = {"format": FORMAT, "actuator": motorlaw.SpeedLaw.kind, "modes": modes,
                    "feature_columns": cols, "grid_hz": harmonic_grid(predictor).tolist(),
                    "motor": {**fixed, "max_voltage_V": max(max_v,
                                                            motorlaw.DEFAULTS["max_voltage_V"])},
                    "motor_ranges": motor_ranges,
-                   "weights": {p: np.zeros((len(PARAMS), len(cols) + 1)).tolist()
+                   "weights": {p: np.zeros((len(params), len(cols) + 1)).tolist()
                                for p in POINTS},
-                   "clip": {k: [-1e6, 1e6] for k in PARAMS}}
+                   "clip": {k: [-1e6, 1e6] for k in params}}
     if group_by_attachment:  # one affine map of the mode per attachment
         choices = next(s.choices for s in predictor.specs if s.name == "attachment")
         provisional["group_by"] = {"input": "attachment", "choices": list(choices)}
-        provisional["weights"] = {p: np.zeros((len(PARAMS), (len(cols) + 1) * len(choices)))
+        provisional["weights"] = {p: np.zeros((len(params), (len(cols) + 1) * len(choices)))
                                   .tolist() for p in POINTS}
     if equivalent_loss:  # C = eta / omega_rated K in the FE transient (fem.transient_analysis)
         provisional["loss_reference_hz"] = fixed["rated_frequency_hz"]
@@ -374,10 +429,10 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     weights, report = fit_weights(train_runs, feats, {p: np.stack(v) for p, v in amp.items()},
                                   shell.grid_hz, max_nfev=max_nfev, intercepts=[
                                       (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)],
-                                  learn_gain=learn_gain)
-    params = np.concatenate([feats @ w.T for w in weights.values()])
-    clip = {name: [float(params[:, i].min()), float(params[:, i].max())]
-            for i, name in enumerate(PARAMS)}
+                                  learn_gain=learn_gain, modes=modes)
+    rows = np.concatenate([feats @ w.T for w in weights.values()])
+    clip = {name: [float(rows[:, i].min()), float(rows[:, i].max())]
+            for i, name in enumerate(params)}
     coefficients = {**provisional, "weights": {p: w.tolist() for p, w in weights.items()},
                     "clip": clip, "fit": report}
     model = model_from_parts(coefficients, hcard, onnx)

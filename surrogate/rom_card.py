@@ -51,7 +51,8 @@ def card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[A
         "interface": "surrogate.runtime.rom.load_envelope_model(path).simulate(t_s, volts, "
                      "design)",
         "model": "grey box: motorlaw speed x harmonic steady response at the instantaneous "
-                 "speed x one learned rotating-frame mode per point (surrogate.runtime.rom)",
+                 f"speed x {'one' if model.modes == 1 else 'two'} learned rotating-frame "
+                 f"mode{'' if model.modes == 1 else 's'} per point (surrogate.runtime.rom)",
         "inputs": inputs,
         "coefficients": COEFFICIENTS_FILE,
         "harmonic": {"card": HARMONIC_CARD_FILE, "graph": HARMONIC_GRAPH_FILE,

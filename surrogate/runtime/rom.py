@@ -17,17 +17,21 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
    clamped into the band. Below f_low (the first frequency of ``grid_hz``, the harmonic
    model's lowest trained frequency) the response is continued with the unbalance force
    m e omega^2 through the identified mode: A(omega) = A(omega_low) (omega / omega_low)^2
-   |i omega_low - lambda| / |i omega - lambda|.
+   |i omega_low - lambda| / |i omega - lambda| (:mod:`surrogate.runtime.rom_steady`).
 3. **Dynamic correction**: one damped mode lambda = -sigma + i 2 pi f_n per point (unit and
    tissue lag, the beat when the rotor passes the mode, the ring-down after switch-off), seen
    from the frame rotating with the force: ``dz/dt = (lambda - i omega) z + (i omega - lambda)
    A(omega)``, z(0) = 0, envelope |z|. In steady running z = A exactly; sigma > 0 by
    construction, so the model is stable for every schedule. Each step is integrated exactly
-   with omega and A held at their step averages.
+   with omega and A held at their step averages. Optionally (``coefficients.modes`` = 2) two
+   modes per point, z = z_1 + z_2, mode 1 forced with a share w of the force and mode 2 with
+   1 - w, so the steady state is still A (:mod:`surrogate.runtime.rom_modes`); the continuation
+   below the band goes through mode 1.
 
-The mode (log sigma, f_n), log g and s are affine in the harmonic model's encoded design features
-(its own encoding, frequency column left out; with ``group_by`` in the coefficients one map per
-choice of that input, e.g. glued / pogo), fitted on FE transients. Designs the FE
+The mode (log sigma, f_n), log g and s (two modes: also log sigma_2, f_2, w) are affine in
+the harmonic model's encoded design features (its own encoding, frequency column left out; with
+``group_by`` in the coefficients one map per choice of that input, e.g. glued / pogo), fitted
+on FE transients. Designs the FE
 transient cannot run (a unit on pogo pins with no rings drifts away) are refused.
 
 The model knows its actuator: ``coefficients.actuator`` (a ``motorlaw`` drive-law name; absent
@@ -53,16 +57,22 @@ from motorlaw import SpeedLaw, drive_law_class, held_speed_and_phase
 from surrogate.runtime.card import CARD_NAME, ModelFileError, read_card, read_model_file
 from surrogate.runtime.encoding import PredictorInputError, n_features
 from surrogate.runtime.predictor import Predictor, make_session
+from surrogate.runtime.rom_modes import PARAMS, envelope_from_params, mode_response, params_for
+from surrogate.runtime.rom_steady import (
+    continued_steady,
+    gain_factor,
+    harmonic_grid,
+    steady_response,
+)
 
-__all__ = ["FORMAT", "POINTS", "STATES", "EnvelopeModel", "RomBlowUpError", "RomInputError",
-           "load_envelope_model", "model_from_parts", "motor_speed"]
+__all__ = ["FORMAT", "PARAMS", "POINTS", "STATES", "EnvelopeModel", "RomBlowUpError",
+           "RomInputError", "continued_steady", "gain_factor", "harmonic_grid",
+           "load_envelope_model", "mode_response", "model_from_parts", "motor_speed",
+           "steady_response"]
 
 FORMAT = "hapticrom-envelope-rom/2"
 POINTS = ("center", "edge")
 STATES = ("center_envelope_um", "edge_envelope_um")
-PARAMS = ("log_sigma", "fn_hz", "log_gain", "gain_slope")
-F_REF_HZ, F_SPAN_HZ = 130.0, 50.0  # the gain slope is per 50 Hz about 130 Hz
-GRID_STEP_HZ = 2.5  # the harmonic model is evaluated this finely and interpolated linearly
 MOTOR_INPUTS = ("tau_spinup_ms", "tau_spindown_ms")
 LOSS_INPUTS = ("tissue_loss_factor", "ring_loss_factor")  # hysteretic loss factors
 
@@ -87,78 +97,15 @@ def motor_speed(t_s: NDArray, volts: NDArray, tau_up_s: float, tau_down_s: float
     return held_speed_and_phase(law, t_s, volts)[0]
 
 
-def mode_response(t: NDArray, omega: NDArray, steady: NDArray, sigma: NDArray,
-                  fn_hz: NDArray) -> NDArray:
-    """Envelope |z| (same unit as ``steady``) of the rotating-frame mode for a batch.
-
-    ``t`` (nt,) s; ``omega`` (nt,) or (nb, nt) rad/s; ``steady`` (nb, nt) the steady response
-    at the instantaneous speed; ``sigma`` (nb,) 1/s and ``fn_hz`` (nb,) Hz the mode. Exact for
-    omega and the steady response held at their step averages."""
-    lam = -np.asarray(sigma, dtype=float) + 2j * math.pi * np.asarray(fn_hz, dtype=float)
-    h = np.diff(t)
-    w = np.broadcast_to(omega, steady.shape)
-    wm = 0.5 * (w[:, 1:] + w[:, :-1])
-    qm = 0.5 * (steady[:, 1:] + steady[:, :-1])
-    decay = np.exp((lam[:, None] - 1j * wm) * h[None, :])
-    z = np.zeros(steady.shape, dtype=complex)
-    zk = np.zeros(steady.shape[0], dtype=complex)
-    for k in range(h.size):  # z -> q + (z - q) e^{(lambda - i omega) h}
-        zk = qm[:, k] + (zk - qm[:, k]) * decay[:, k]
-        z[:, k + 1] = zk
-    return np.abs(z)
-
-
-def continued_steady(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
-                     fn_hz: NDArray) -> NDArray:
-    """Steady response (nb, nt) at the speeds ``omega`` ((nt,) or (nb, nt), rad/s) from the
-    harmonic amplitudes ``amplitude`` (nb, n_grid) on ``grid_hz`` (increasing, from the
-    harmonic model's lowest trained frequency f_low), continued below f_low by
-    m e omega^2 through the mode (see the module docstring)."""
-    f = np.broadcast_to(omega, (amplitude.shape[0], np.shape(omega)[-1])) / (2 * math.pi)
-    above = np.stack([np.interp(fi, grid_hz, a) for fi, a in zip(f, amplitude, strict=True)])
-    lam = -np.asarray(sigma)[:, None] + 2j * math.pi * np.asarray(fn_hz)[:, None]
-    f_low = float(grid_hz[0])
-    w_low, w = 2 * math.pi * f_low, 2 * math.pi * f
-    below = (amplitude[:, :1] * (f / f_low) ** 2 * np.abs(1j * w_low - lam)
-             / np.abs(1j * w - lam))
-    return np.where(f >= f_low, above, below)
-
-
-def harmonic_grid(harmonic: Predictor) -> NDArray:
-    """Frequencies (Hz) at which the envelope model evaluates its harmonic model: its trained
-    ``frequency_hz`` range every ``GRID_STEP_HZ``."""
-    spec = next(s for s in harmonic.specs if s.name == "frequency_hz")
-    return np.arange(float(spec.low), float(spec.high) + 1e-9, GRID_STEP_HZ)
-
-
-def steady_response(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
-                    fn_hz: NDArray, gain: NDArray, slope: NDArray) -> NDArray:
-    """The model's steady response (nb, nt) at the speeds ``omega``: the learned gain times
-    the harmonic amplitudes continued below the band (:func:`gain_factor`,
-    :func:`continued_steady`; per-batch parameters ``sigma`` 1/s, ``fn_hz`` Hz, ``gain``,
-    ``slope``, each (nb,))."""
-    return (gain_factor(omega, gain, slope, grid_hz)
-            * continued_steady(omega, grid_hz, amplitude, sigma, fn_hz))
-
-
-def gain_factor(omega: NDArray, gain: NDArray, slope: NDArray, grid_hz: NDArray) -> NDArray:
-    """Learned steady gain (nb, nt): g exp(slope (f - 130 Hz) / 50 Hz), f clamped into the
-    harmonic model's band ``grid_hz`` (below it, the continuation through the mode carries
-    the frequency dependence)."""
-    f = np.clip(np.asarray(omega) / (2 * math.pi), grid_hz[0], grid_hz[-1])
-    return np.asarray(gain)[:, None] * np.exp(np.asarray(slope)[:, None]
-                                              * (f - F_REF_HZ) / F_SPAN_HZ)
-
-
 @dataclass(frozen=True)
 class EnvelopeModel:
     """The grey-box envelope model (see the module docstring).
 
     Attributes:
         harmonic: the harmonic predictor (steady amplitudes at a design and frequency).
-        weights: point -> (4, n_features + 1) rows for log sigma, f_n, log g and the gain's
-            frequency slope (last column: intercept) over the harmonic model's encoded
-            design features.
+        weights: point -> (len(params), n_features + 1) rows for log sigma, f_n, log g and
+            the gain's frequency slope, with two modes then log sigma_2, f_2 and w (last
+            column: intercept), over the harmonic model's encoded design features.
         motor: the actuator's drive law, a speed law (time constants are design inputs).
         motor_ranges: trained ranges of the motor time constants, ms.
         grid_hz: frequencies (Hz) the harmonic model is evaluated at, over its trained band.
@@ -173,6 +120,16 @@ class EnvelopeModel:
     grid_hz: NDArray
     clip: dict[str, tuple[float, float]]
     meta: dict[str, Any]
+
+    @property
+    def modes(self) -> int:
+        """Modes per point (``coefficients.modes``; 1 in models that do not record it)."""
+        return int(self.meta.get("modes", 1))
+
+    @property
+    def params(self) -> tuple[str, ...]:
+        """The names of the weight rows (:func:`surrogate.runtime.rom_modes.params_for`)."""
+        return params_for(self.modes)
 
     @property
     def actuator(self) -> str:
@@ -225,17 +182,26 @@ class EnvelopeModel:
         # one affine map per choice of a categorical input (e.g. glued / pogo units)
         return np.kron([design[group["input"]] == c for c in group["choices"]], x)
 
+    def parameter_rows(self, design: Mapping[str, Any], *,
+                       extrapolate: bool = False) -> dict[str, NDArray]:
+        """point -> the design's parameters (len(params),) in ``params`` order, each clipped
+        to its trained spread."""
+        x = self.features(design, extrapolate=extrapolate)
+        lo, hi = (np.array([self.clip[n][i] for n in self.params]) for i in (0, 1))
+        return {point: np.clip(self.weights[point] @ x, lo, hi) for point in POINTS}
+
     def parameters(self, design: Mapping[str, Any], *,
                    extrapolate: bool = False) -> dict[str, dict[str, float]]:
-        """point -> {sigma_1_s, fn_hz, gain} of a design."""
-        x = self.features(design, extrapolate=extrapolate)
+        """point -> {sigma_1_s, fn_hz, gain, gain_slope} of a design (with two modes also
+        sigma2_1_s, fn2_hz and weight, mode 1's share of the force)."""
         out = {}
-        for point in POINTS:
-            raw = dict(zip(PARAMS, self.weights[point] @ x, strict=True))
-            for name, (lo, hi) in self.clip.items():
-                raw[name] = float(np.clip(raw[name], lo, hi))
+        for point, row in self.parameter_rows(design, extrapolate=extrapolate).items():
+            raw = dict(zip(self.params, map(float, row), strict=True))
             out[point] = {"sigma_1_s": math.exp(raw["log_sigma"]), "fn_hz": raw["fn_hz"],
                           "gain": math.exp(raw["log_gain"]), "gain_slope": raw["gain_slope"]}
+            if self.modes == 2:
+                out[point].update(sigma2_1_s=math.exp(raw["log_sigma2"]),
+                                  fn2_hz=raw["fn2_hz"], weight=raw["weight"])
         return out
 
     def steady_amplitudes(self, design: Mapping[str, Any], *,
@@ -275,13 +241,11 @@ class EnvelopeModel:
         dsg = self._check_design(design, extrapolate)
         omega = motor_speed(t, v, dsg["tau_spinup_ms"] * 1e-3, dsg["tau_spindown_ms"] * 1e-3,
                             self.motor)
-        par = self.parameters(dsg, extrapolate=extrapolate)
+        rows = self.parameter_rows(dsg, extrapolate=extrapolate)
         steady = self.steady_levels(omega, dsg, extrapolate=extrapolate)
         out: dict[str, NDArray] = {}
         for point, name in zip(POINTS, STATES, strict=True):
-            p = par[point]
-            env = mode_response(t, omega, steady[point][None, :], np.array([p["sigma_1_s"]]),
-                                np.array([p["fn_hz"]]))[0]
+            env = envelope_from_params(t, omega, steady[point][None, :], rows[point][None])[0]
             if not np.all(np.isfinite(env)):
                 raise RomBlowUpError("the envelope is not finite (corrupt coefficients?)")
             out[name] = env
@@ -348,16 +312,18 @@ def model_from_parts(coefficients: Mapping[str, Any], harmonic_card: dict[str, A
         raise ValueError("group_by: need {input: a categorical design input, choices: [...]}")
     n = (len(coefficients["feature_columns"]) + 1) * (1 if group is None
                                                       else len(group["choices"]))
+    modes = coefficients.get("modes", 1)  # absent in one-mode models trained before it
+    params = params_for(modes)  # ValueError naming modes
     weights = {}
     for point in POINTS:
         w = np.asarray(coefficients["weights"][point], dtype=float)
-        if w.shape != (len(PARAMS), n) or not np.all(np.isfinite(w)):
+        if w.shape != (len(params), n) or not np.all(np.isfinite(w)):
             raise ValueError(f"weights.{point}: need finite values of shape "
-                             f"{(len(PARAMS), n)}, got {w.shape}")
+                             f"{(len(params), n)}, got {w.shape}")
         weights[point] = w
     clip = {k: (float(lo), float(hi)) for k, (lo, hi) in coefficients["clip"].items()}
-    if set(clip) != set(PARAMS):
-        raise ValueError(f"clip: need bounds for {list(PARAMS)}")
+    if set(clip) != set(params):
+        raise ValueError(f"clip: need bounds for {list(params)}")
     grid = np.asarray(coefficients["grid_hz"], dtype=float)
     band = harmonic_grid(harmonic)
     if (grid.ndim != 1 or grid.size < 2 or not math.isclose(grid[0], band[0])

@@ -1,9 +1,10 @@
 """Options of the envelope model's identification (docs/transient-model.md, "what was tried"):
 the gain held at 1 (steady level = the harmonic model), one mode map per attachment, the
-transient's equivalent loss factor, and the settled-run steady metric."""
+transient's equivalent loss factor, the settled-run steady metric and two modes per point."""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import replace
 
@@ -12,7 +13,8 @@ import pytest
 
 from motorlaw import SpeedLaw
 from surrogate.rom_metrics import envelope_metrics, summarise
-from surrogate.runtime.rom import load_envelope_model, motor_speed
+from surrogate.runtime.rom import load_envelope_model, model_from_parts, motor_speed
+from surrogate.runtime.rom_modes import mode_response, modes_response, params_for
 from tests.surrogate.rom_cases import DESIGN, SHIPPED
 
 MOTOR = SpeedLaw()
@@ -115,3 +117,120 @@ def test_settled_flag_and_the_settled_steady_summary():
     s = summarise(rows)
     assert s["center_settled_runs"] == 1
     assert s["center_steady_rel_err_settled_median"] == pytest.approx(0.02, rel=1e-6)
+
+
+# --------------------------------------------------------------------------- two modes
+
+#: fast mode 1 (sigma 150 1/s, 60 Hz), slow mode 2 (25 1/s, 40 Hz), mode 1's share w
+TWO_MODES = [math.log(150.0), 60.0, 0.0, 0.0, math.log(25.0), 40.0, 0.7]
+
+
+def _intercept_model(row):
+    """The shipped model with every design's parameters ``row`` (intercept-only weights; two
+    modes for a row of 7)."""
+    coef = json.loads((SHIPPED / "coefficients.json").read_text())
+    hcard = json.loads((SHIPPED / "harmonic_card.json").read_text())
+    n = np.asarray(coef["weights"]["center"]).shape[1]
+    weights = np.zeros((len(row), n))
+    for j in range(len(coef["group_by"]["choices"])):  # each group's intercept column
+        weights[:, (j + 1) * n // len(coef["group_by"]["choices"]) - 1] = row
+    modes = 2 if len(row) == len(params_for(2)) else 1
+    coef.update(modes=modes, weights={p: weights.tolist() for p in ("center", "edge")},
+                clip={k: [-1e6, 1e6] for k in params_for(modes)})
+    return model_from_parts(coef, hcard, SHIPPED / "harmonic.onnx")
+
+
+def test_two_modes_are_identified_back(model):
+    """Runs made by the two-mode equations: the per-run starts about the one-mode fit and
+    the refinements recover both modes and the share."""
+    from surrogate import rom
+
+    runs, amps = _synthetic_runs(model, [TWO_MODES])
+    weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, model.grid_hz,
+                                      learn_gain=False, modes=2)
+    for point in ("center", "edge"):
+        w = weights[point][:, 0]
+        assert w.shape == (7,)
+        assert np.exp(w[[0, 4]]) == pytest.approx([150.0, 25.0], rel=0.02)
+        assert w[[1, 5]] == pytest.approx([60.0, 40.0], abs=0.5)
+        assert w[6] == pytest.approx(0.7, abs=0.01)
+        assert w[2] == 0.0 and w[3] == 0.0  # the gain held
+        assert report[point]["refined_rms"] < 1e-3
+
+
+@pytest.mark.parametrize("share", [0.7, 1.6, -0.5])
+def test_two_modes_settle_on_the_steady_response_exactly(share):
+    """c_1 = w, c_2 = 1 - w: at constant speed z_1 + z_2 = A, whatever the (real) share."""
+    t = np.linspace(0.0, 1.0, 4001)
+    omega = np.full(t.size, 2 * math.pi * 120.0)
+    q = np.full((1, t.size), 7.0)
+    env = modes_response(t, omega, q, np.array([[150.0, 25.0]]), np.array([[60.0, 40.0]]),
+                         np.array([[share, 1.0 - share]]))[0]
+    assert env[-1] == pytest.approx(7.0, rel=1e-9)
+
+
+def test_a_two_mode_model_runs_from_its_coefficients_and_settles_on_the_harmonic_level():
+    two = _intercept_model(TWO_MODES)
+    assert two.modes == 2 and two.params == params_for(2)
+    par = two.parameters(DESIGN)["edge"]
+    assert (par["sigma2_1_s"], par["fn2_hz"], par["weight"]) == pytest.approx((25.0, 40.0, 0.7))
+    t = np.arange(0.0, 1.0, 5e-4)
+    out = two.simulate(t, np.full(t.size, 3.3), DESIGN)
+    level = two.steady_levels(out["speed_hz"][-1:] * 2 * math.pi, DESIGN)
+    for point in ("center", "edge"):
+        assert out[f"{point}_envelope_um"][-1] == pytest.approx(level[point][0], rel=1e-9)
+    # w = 1: the second mode is not forced, the model is the one-mode model of mode 1
+    unforced = _intercept_model([*TWO_MODES[:6], 1.0])
+    volts = np.where(t < 0.06, 3.3, np.where(t < 0.08, -3.0, 0.0))
+    a, b = (m.simulate(t, volts, DESIGN) for m in (_intercept_model(TWO_MODES[:4]), unforced))
+    for point in ("center", "edge"):
+        np.testing.assert_allclose(a[f"{point}_envelope_um"], b[f"{point}_envelope_um"],
+                                   rtol=1e-12, atol=1e-12)
+
+
+def test_one_mode_output_is_unchanged(model):
+    """The one-mode recurrence of the model before two modes, step by step: the shared
+    integration gives the same numbers bit for bit, and a model recording ``modes: 1`` is the
+    model that records nothing."""
+    t = np.arange(0.0, 0.2, 2.5e-4)
+    volts = np.where(t < 0.05, 4.0, np.where(t < 0.07, -3.0, 0.0))
+    omega = motor_speed(t, volts, 0.02, 0.035, MOTOR)
+    q = np.stack([3.0 * (omega / MOTOR.rated_omega) ** 2, (omega / MOTOR.rated_omega) ** 2])
+    sigma, fn = np.array([60.0, 210.0]), np.array([45.0, 90.0])
+    lam = -sigma + 2j * math.pi * fn
+    h = np.diff(t)
+    wm, qm = 0.5 * (omega[1:] + omega[:-1]), 0.5 * (q[:, 1:] + q[:, :-1])
+    decay = np.exp((lam[:, None] - 1j * wm) * h[None, :])
+    ref = np.zeros(q.shape, dtype=complex)
+    for k in range(h.size):
+        ref[:, k + 1] = qm[:, k] + (ref[:, k] - qm[:, k]) * decay[:, k]
+    assert np.array_equal(mode_response(t, omega, q, sigma, fn), np.abs(ref))
+    coef = json.loads((SHIPPED / "coefficients.json").read_text())
+    assert "modes" not in coef  # the shipped model predates the field
+    hcard = json.loads((SHIPPED / "harmonic_card.json").read_text())
+    recorded = model_from_parts({**coef, "modes": 1}, hcard, SHIPPED / "harmonic.onnx")
+    a, b = (m.simulate(t, volts, DESIGN) for m in (model, recorded))
+    for k in a:
+        assert np.array_equal(a[k], b[k])
+
+
+@pytest.mark.parametrize("bad", [3, 0, True, 2.0, "2"])
+def test_bad_modes_are_refused_by_name(model, tmp_path, bad):
+    from surrogate import rom
+
+    with pytest.raises(ValueError, match=r"^modes = .*allowed 1 or 2"):
+        rom.train([tmp_path], tmp_path / "out", modes=bad)
+    coef = json.loads((SHIPPED / "coefficients.json").read_text())
+    hcard = json.loads((SHIPPED / "harmonic_card.json").read_text())
+    with pytest.raises(ValueError, match=r"^modes: "):
+        model_from_parts({**coef, "modes": bad}, hcard, SHIPPED / "harmonic.onnx")
+
+
+def test_cli_refuses_bad_modes_naming_the_field(tmp_path, capsys):
+    from hapticrom.cli import main
+
+    out = tmp_path / "rom"
+    assert main(["train", "--data", str(SHIPPED.parents[1] / "datasets" / "transient"),
+                 "--kind", "rom", "--out", str(out), "--options", '{"modes": 3}']) == 2
+    assert "modes = 3: allowed 1 or 2" in capsys.readouterr().err
+    assert not out.exists()
