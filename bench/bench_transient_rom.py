@@ -268,7 +268,8 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
     from scipy.optimize import least_squares
 
     from surrogate import rom
-    from surrogate.runtime.rom import continued_steady, load_envelope_model, steady_response
+    from surrogate.runtime.rom import continued_steady, load_envelope_model
+    from surrogate.runtime.rom_steady import steady_from_params
 
     model = load_envelope_model(ROOT / "models" / "rom-default")
     df = pd.read_parquet(sorted((ROOT / "datasets" / "transient").glob("part-*.parquet"))[part])
@@ -299,8 +300,7 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
                                    max_nfev=60) for f0 in (35.0, 50.0, 70.0)),
                     key=lambda s: s.cost)
         x1 = best1.x
-        q1 = steady_response(run.omega, model.grid_hz, a, np.exp(x1[:1]), x1[1:2],
-                             np.exp(x1[2:3]), x1[3:4])[0]
+        q1 = steady_from_params(run.omega, model.grid_hz, a, x1[None])[0]
         best2 = min((least_squares(lambda x, t=t, q1=q1, run=run, e=e, keep=keep, scale=scale:
                                    ((_two_modes(t, run.omega, q1, x) - e) / scale)[keep],
                                    [x1[0], x1[1], np.log(150.0), f2, w0, 0.0],

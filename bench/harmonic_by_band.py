@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -30,29 +31,26 @@ DATA = ("datasets/default", "datasets/low-band")
 
 
 def held_out_rows(data: tuple[str, ...] = DATA, test_fraction: float = 0.2, seed: int = 0
-                  ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """(inputs by name, centre um, edge um) of the held-out rows of ``hapticrom train``."""
+                  ) -> tuple[Any, np.ndarray]:
+    """(the training data, the held-out row indices of ``hapticrom train``)."""
     from surrogate.train import load_datasets, split
 
     d = load_datasets([str(ROOT / p) for p in data])
-    _, test = split(len(d.codes), test_fraction, seed)
-    inputs = {}
-    for j, spec in enumerate(d.specs):
-        col = d.codes[test, j]
-        inputs[spec.name] = (np.array([spec.choices[int(v)] for v in col])
-                             if spec.type == "categorical" else col.astype(float))
-    return inputs, d.center_um[test], d.profile_um[test, 0]
+    return d, split(len(d.codes), test_fraction, seed)[1]
 
 
-def scores(model: str, inputs: dict[str, np.ndarray], center: np.ndarray, edge: np.ndarray
-           ) -> list[str]:
+def scores(model: str, d: Any, test: np.ndarray) -> list[str]:
     """One line per band and attachment: median / p95 / p99 / max relative error, %."""
     from surrogate.runtime.predictor import load_predictor
 
-    pred = load_predictor(model).predict(inputs, extrapolate=True)
-    rel = {"centre": np.abs(pred["center_amplitude_um"] / center - 1.0),
-           "edge": np.abs(pred["profile_um"][:, 0] / edge - 1.0)}
-    f, att = inputs["frequency_hz"], inputs["attachment"]
+    codes = d.codes[test]  # the predictor reads the datasets' input codes as they are
+    pred = load_predictor(model).predict(codes, extrapolate=True)
+    rel = {"centre": np.abs(pred["center_amplitude_um"] / d.center_um[test] - 1.0),
+           "edge": np.abs(pred["profile_um"][:, 0] / d.profile_um[test, 0] - 1.0)}
+    column = {s.name: j for j, s in enumerate(d.specs)}
+    f = codes[:, column["frequency_hz"]]
+    att = np.asarray(d.specs[column["attachment"]].choices)[
+        codes[:, column["attachment"]].astype(int)]
     lines = []
     for lo, hi in BANDS_HZ:
         for group in ("glued", "pogo", "all"):
@@ -70,11 +68,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--models", nargs="+", default=["models/nn-wide", "models/nn-default"],
                     help="harmonic model directories with a frequency_hz input")
     args = ap.parse_args(argv)
-    inputs, center, edge = held_out_rows()
+    data, test = held_out_rows()
     print("median / p95 / p99 / max relative error, centre | edge")
     for model in args.models:
         print(model)
-        for line in scores(model, inputs, center, edge):
+        for line in scores(model, data, test):
             print(line)
     return 0
 

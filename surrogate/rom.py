@@ -56,9 +56,9 @@ from surrogate.runtime.rom import (
     POINTS,
     harmonic_grid,
     model_from_parts,
-    steady_response,
 )
 from surrogate.runtime.rom_modes import envelope_from_params, params_for
+from surrogate.runtime.rom_steady import steady_from_params
 
 # the runs' reading lives in surrogate.rom_runs; re-exported here, where the fit's callers look
 __all__ = ["Run", "complex_envelopes", "fit_weights", "load_runs", "run_from_row",
@@ -95,9 +95,7 @@ def _predict(t: NDArray, omega: NDArray, amp: NDArray, grid: NDArray, p: NDArray
     """Model envelopes (nb, nt) for parameter rows p (nb, 4) in ``PARAMS`` order (or (nb, 7)
     with the second mode's rows, :func:`surrogate.runtime.rom_modes.params_for`), harmonic
     amplitudes ``amp`` (nb, n_grid) on ``grid`` (Hz)."""
-    sigma, fn = np.exp(p[:, 0]), p[:, 1]
-    steady = steady_response(omega, grid, amp, sigma, fn, np.exp(p[:, 2]), p[:, 3])
-    return envelope_from_params(t, omega, steady, p)
+    return envelope_from_params(t, omega, steady_from_params(omega, grid, amp, p), p)
 
 
 def _grid_start(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: NDArray,

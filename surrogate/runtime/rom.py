@@ -62,6 +62,7 @@ from surrogate.runtime.rom_steady import (
     continued_steady,
     gain_factor,
     harmonic_grid,
+    steady_from_params,
     steady_response,
 )
 
@@ -222,13 +223,16 @@ class EnvelopeModel:
         """point -> the model's steady envelope (um) at the speeds ``omega`` (rad/s, any
         shape (n,)): what the envelope tends to while the speed is held (the learned gain times
         the harmonic response, continued below its band; :func:`steady_response`)."""
-        w = np.atleast_1d(np.asarray(omega, dtype=float))
-        par = self.parameters(design, extrapolate=extrapolate)
+        rows = self.parameter_rows(design, extrapolate=extrapolate)
+        return self._steady(np.atleast_1d(np.asarray(omega, dtype=float)), rows, design,
+                            extrapolate)
+
+    def _steady(self, omega: NDArray, rows: Mapping[str, NDArray], design: Mapping[str, Any],
+                extrapolate: bool) -> dict[str, NDArray]:
+        """point -> steady envelope (um) at ``omega`` for the design's parameter ``rows``."""
         amp = self.steady_amplitudes(design, extrapolate=extrapolate)
-        return {p: steady_response(w, self.grid_hz, amp[p][None, :],
-                                   np.array([par[p]["sigma_1_s"]]), np.array([par[p]["fn_hz"]]),
-                                   np.array([par[p]["gain"]]),
-                                   np.array([par[p]["gain_slope"]]))[0] for p in POINTS}
+        return {p: steady_from_params(omega, self.grid_hz, amp[p][None, :], row[None])[0]
+                for p, row in rows.items()}
 
     def simulate(self, t_s: Any, volts: Any, design: Mapping[str, Any], *,
                  extrapolate: bool = False) -> dict[str, NDArray]:
@@ -242,7 +246,7 @@ class EnvelopeModel:
         omega = motor_speed(t, v, dsg["tau_spinup_ms"] * 1e-3, dsg["tau_spindown_ms"] * 1e-3,
                             self.motor)
         rows = self.parameter_rows(dsg, extrapolate=extrapolate)
-        steady = self.steady_levels(omega, dsg, extrapolate=extrapolate)
+        steady = self._steady(omega, rows, dsg, extrapolate)
         out: dict[str, NDArray] = {}
         for point, name in zip(POINTS, STATES, strict=True):
             env = envelope_from_params(t, omega, steady[point][None, :], rows[point][None])[0]

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from surrogate.runtime.predictor import Predictor
 
 __all__ = ["F_REF_HZ", "F_SPAN_HZ", "GRID_STEP_HZ", "continued_steady", "gain_factor",
-           "harmonic_grid", "steady_response"]
+           "harmonic_grid", "steady_from_params", "steady_response"]
 
 F_REF_HZ, F_SPAN_HZ = 130.0, 50.0  # the gain slope is per 50 Hz about 130 Hz
 GRID_STEP_HZ = 2.5  # the harmonic model is evaluated this finely and interpolated linearly
@@ -52,6 +52,15 @@ def steady_response(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma:
     ``slope``, each (nb,))."""
     return (gain_factor(omega, gain, slope, grid_hz)
             * continued_steady(omega, grid_hz, amplitude, sigma, fn_hz))
+
+
+def steady_from_params(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, p: NDArray
+                       ) -> NDArray:
+    """:func:`steady_response` for parameter rows ``p`` (nb, >= 4: log sigma, f_n, log g,
+    slope first, as :data:`surrogate.runtime.rom_modes.PARAMS`)."""
+    p = np.asarray(p, dtype=float)
+    return steady_response(omega, grid_hz, amplitude, np.exp(p[:, 0]), p[:, 1],
+                           np.exp(p[:, 2]), p[:, 3])
 
 
 def gain_factor(omega: NDArray, gain: NDArray, slope: NDArray, grid_hz: NDArray) -> NDArray:
