@@ -96,7 +96,10 @@ def part_problems(store: Store) -> list[str]:
         if recorded is not None and recorded != store.manifest.get("space_hash"):
             problems.append(f"{part.name} was written for another space ({recorded[:12]}...)")
             continue
-        t = store.read_part(part, ["source", "sample_id"]).to_pydict()
+        try:
+            t = store.read_part(part, ["source", "sample_id"]).to_pydict()
+        except DatasetError:
+            continue  # unreadable: reported (validate) or raised (read) on its own
         repeats: dict[str, int] = {}
         for key in zip(t["source"], t["sample_id"], strict=True):
             if key in first:
