@@ -1,6 +1,6 @@
 """The GP on sweep data (issue 20, item 3): output scaling, inducing set, std propagation.
 
-Trains ``hapticrom train --kind gp`` models on a sweep dataset (:func:`surrogate.sweep_train.
+Trains ``hapticrom train --kind gp`` models on a sweep dataset (:func:`surrogate.sweep.train.
 train_sweep`, the command's defaults and split; one model per ``--variants`` entry of GP
 options), reports the fit time, the graph's size, the card's held-out metrics and the scores
 on ``--test-data`` (a sweep dataset at another Sobol seed), every (design, band frequency)
@@ -10,7 +10,7 @@ coverage).
 
 ``--sigma-points S`` compares, on the first variant refitted in memory, the two ways of
 carrying the coefficients' std to ln |u|: the first-order propagation the graph ships
-(:func:`surrogate.sweep_gp.linearised_log_std`) and S fixed Gaussian draws of the targets
+(:func:`surrogate.sweep.gp.linearised_log_std`) and S fixed Gaussian draws of the targets
 decoded over the band (the std of the decoded ln |u| over the draws). Each is scaled by the
 split-conformal factors of its calibration designs (:func:`surrogate.intervals.calibrate`)
 and scored on the held-out designs: coverage and the median calibrated half-width (smaller
@@ -41,14 +41,14 @@ from bench_sweep_nn import baseline_predict, line, score
 
 from surrogate.intervals import Z95, calibrate, coverage, normalised_residual
 from surrogate.runtime.encoding import encode
-from surrogate.sweep_gp import fit_sweep_gp, linearised_log_std
-from surrogate.sweep_targets import (
+from surrogate.sweep.gp import fit_sweep_gp, linearised_log_std
+from surrogate.sweep.targets import (
     load_sweep_datasets,
     log_magnitudes,
     log_output_columns,
     pair_rows,
 )
-from surrogate.sweep_train import train_sweep
+from surrogate.sweep.train import train_sweep
 from surrogate.train import _calibration_rows, split
 
 
@@ -120,8 +120,8 @@ def time_fit(n: int, d: int = 14, T: int = 178, n_hyper: int = 1500) -> None:
     kernel matrix + Cholesky at ``n`` designs (random inputs; see the docstring)."""
     from scipy.linalg import cholesky
 
-    from surrogate.gp import ard_kernel
-    from surrogate.sweep_gp import _SummedGPR
+    from surrogate.estimators.gp import ard_kernel
+    from surrogate.sweep.gp import _SummedGPR
 
     rng = np.random.default_rng(0)
     X = rng.uniform(size=(n_hyper, d))

@@ -2,7 +2,7 @@
 
 Issue 20, items 1 and 3. On the same designs of a sweep dataset (held out by design with the
 split of ``hapticrom train``: ``--test`` and ``--seed``), this fits the complex-band model of
-:mod:`surrogate.sweep_train` once by MSE on its targets (``loss = "coefficients"``), scores it,
+:mod:`surrogate.sweep.train` once by MSE on its targets (``loss = "coefficients"``), scores it,
 then keeps training the same members through the differentiable decode on ln magnitudes
 (``loss = "magnitude"``, what ``hapticrom train`` ships by default) and scores it again. Every
 score is of the exported ONNX graph run on the run-time encoding, at every band frequency of
@@ -28,9 +28,9 @@ import numpy as np
 
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor, make_session
-from surrogate.sweep_export import export_sweep_nn
-from surrogate.sweep_targets import SweepData, load_sweep_datasets, pair_rows
-from surrogate.sweep_train import _split_options, fit_sweep
+from surrogate.sweep.export import export_sweep_nn
+from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
+from surrogate.sweep.train import _split_options, fit_sweep
 from surrogate.train import _calibration_rows, split
 
 
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     weights = [float(w) for w in args.centre_weights.split(",")]
     for stage in ("coefficients", *(f"magnitude w{w:g}" for w in weights)):
         if stage != "coefficients":
-            from surrogate.sweep_export import BandDecoder, magnitude_error
+            from surrogate.sweep.export import BandDecoder, magnitude_error
 
             t0 = time.perf_counter()
             X = encode(data.codes[tr], data.specs)

@@ -6,14 +6,14 @@ and after the factored decode, on the SAME members; and the factored basis's flo
         [--options '{"max_epochs": 20, "loss": "coefficients"}'] [--test-fraction 0.2] \\
         [--before 266242a] [--models nn-default MODEL_DIR ...] [--rounds 15] [--batch 10000]
 
-* One ensemble is fitted (``surrogate.sweep_train.fit_sweep``, ``--options``; the timing does
+* One ensemble is fitted (``surrogate.sweep.train.fit_sweep``, ``--options``; the timing does
   not depend on its accuracy, only on its sizes: 256 x 256 x 5 members and the basis by
   default) on the training designs of ``--data`` (the split ``hapticrom train`` makes, seed 0,
   ``--test-fraction``).
-* "before": its graph exported by ``surrogate/sweep_export.py`` as of git revision
+* "before": its graph exported by ``surrogate/sweep/export.py`` as of git revision
   ``--before`` (read with ``git show``; that decode gathers the whole (k, P * 6) basis with
   its zero blocks at two grid points per row, from the PODs' exact basis); "after": by the
-  current code (the factored basis of ``surrogate/sweep_basis.py``). Each graph is checked
+  current code (the factored basis of ``surrogate/sweep/basis.py``). Each graph is checked
   against the numpy rebuild of its basis (``reference_log_outputs``) at every band frequency of
   held-out designs, then timed by ``bench/bench_predict.py``'s :func:`bench_predictor`
   (one thread; FLOPs counted from the products the graph really does).
@@ -44,19 +44,19 @@ from bench_predict import bench, bench_predictor  # noqa: E402
 
 from surrogate.runtime.encoding import encode  # noqa: E402
 from surrogate.runtime.predictor import Predictor, make_session  # noqa: E402
-from surrogate.sweep_basis import tail_error  # noqa: E402
-from surrogate.sweep_export import (  # noqa: E402
+from surrogate.sweep.basis import tail_error  # noqa: E402
+from surrogate.sweep.export import (  # noqa: E402
     export_sweep_nn,
     member_targets,
     reference_log_outputs,
 )
-from surrogate.sweep_targets import (  # noqa: E402
+from surrogate.sweep.targets import (  # noqa: E402
     BandTargets,
     SweepData,
     load_sweep_datasets,
     log_magnitudes,
 )
-from surrogate.sweep_train import fit_sweep  # noqa: E402
+from surrogate.sweep.train import fit_sweep  # noqa: E402
 from surrogate.train import card_head, split  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -149,7 +149,7 @@ def main() -> None:
         ranks = {tol: int(np.argmax(err <= tol)) for tol in (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)}
         print(f"  {name}: rank for relative error <= tol: "
               + ", ".join(f"{tol:g}: {s}" for tol, s in ranks.items()))
-    old = module_at(args.before, "surrogate/sweep_export.py", "sweep_export_before")
+    old = module_at(args.before, "surrogate/sweep/export.py", "sweep_export_before")
     specs = data.all_specs
     card = {**card_head("nn", "float32", specs, data, ()), "files": {}}
     graphs = {f"sweep, before ({args.before}: whole basis gathered)":

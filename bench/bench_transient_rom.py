@@ -10,7 +10,7 @@ function is run with the FE transient as the response: every schedule it asks fo
 the nominal voltage, overdrive kick, switch-off, reverse-drive brake) becomes a scene of the
 transient space (``datasets/spaces/transient.toml``: its mesh, order and time step) and is
 solved, and the envelope is demodulated with the exact rotor angle as in training
-(``surrogate.rom``). The two timings use the same definitions by construction.
+(``surrogate.envelope.fit``). The two timings use the same definitions by construction.
 
 Criterion (issue 23): every time within 1 ms or 5 %. Prints a table; ``--json`` writes it.
 Also prints what the plan says above the motor's reach (200 Hz). ``--structures`` compares the
@@ -75,7 +75,7 @@ class FEResponse:
 
     def solve(self, steps_ms: list[list[float]], duration_ms: float) -> Any:
         from surrogate.data.worker import run_sample
-        from surrogate.rom import run_from_row
+        from surrogate.envelope.fit import run_from_row
 
         for cached_steps, cached_ms, run in self.cache:
             head = [s for s in cached_steps if s[0] < duration_ms - 1e-9]
@@ -156,8 +156,8 @@ def step_check(n_rows: int = 3, part: int = 2) -> list[dict[str, Any]]:
     import pandas as pd
 
     from surrogate.data.worker import run_sample
-    from surrogate.rom import run_from_row
-    from surrogate.rom_metrics import envelope_metrics
+    from surrogate.envelope.fit import run_from_row
+    from surrogate.envelope.metrics import envelope_metrics
 
     names = [k for k in DESIGNS["bare"]] + ["n_rings", "attachment"]
     names = list(dict.fromkeys(names))
@@ -204,11 +204,11 @@ def drive_frequency_hz(scene_json: str) -> float:
 def held_out_groups(model: str | Path = ROOT / "models" / "rom-default",
                     data: str | Path = ROOT / "datasets" / "transient"
                     ) -> dict[str, dict[str, float]]:
-    """The card's held-out summary (``surrogate.rom_metrics.summarise``: medians and maxima)
+    """The card's held-out summary (``surrogate.envelope.metrics.summarise``: medians and maxima)
     recomputed on groups of its runs: per attachment and with the first burst's drive speed
     below / at or above 100 Hz (the lowest frequency of the default harmonic data)."""
     from surrogate.data.store import Store
-    from surrogate.rom_metrics import summarise
+    from surrogate.envelope.metrics import summarise
 
     card = json.loads((Path(model) / "card.json").read_text())
     df = Store.open(data).read()
@@ -267,7 +267,7 @@ def structure_check(n_runs: int = 10, part: int = 5) -> list[dict[str, Any]]:
     import pandas as pd
     from scipy.optimize import least_squares
 
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
     from surrogate.runtime.rom import continued_steady, load_envelope_model
     from surrogate.runtime.rom_steady import steady_from_params
 

@@ -5,13 +5,13 @@
 
 For each held-out run of ``datasets/transient`` the FE transient's "steady" level (the mean
 envelope over the 5 ms before the first switch-off, the card's definition,
-``surrogate.rom_metrics``) is compared with steady responses at the run's mean speed in that
+``surrogate.envelope.metrics``) is compared with steady responses at the run's mean speed in that
 window (f = omega / 2 pi):
 
 - ``tone``: the FE's own amplitude at f without demodulation: the complex amplitude of each
   displacement component at f fitted over the last two periods before switch-off (with an
   offset), combined as sqrt(sum_c |U_c|^2); ``tone`` against FE is the error of the demodulated
-  envelope (``surrogate.rom.complex_envelopes``: its FFT-based analytic signal picks up the
+  envelope (``surrogate.envelope.fit.complex_envelopes``: its FFT-based analytic signal picks up the
   1/t tails of the low-frequency motion of later braking and pulses) and of the 5 ms mean;
 - ``own``: a harmonic solve of the run's own scene on the transient's own matrices (linear
   elements, damping layer) with the transient's own loss model (``analysis.damping``:
@@ -144,8 +144,8 @@ def diagnose(limit: int | None = None, model_path: str | Path = ROOT / "models" 
     rows: only the NN and the model are evaluated again). ``out_json``: the rows so far are
     written there after each run."""
     from surrogate.data.store import Store
-    from surrogate.rom import HOLDOUT_EVERY, run_from_row
-    from surrogate.rom_metrics import SETTLED_PTP, SETTLED_WINDOW_S, STEADY_WINDOW_S
+    from surrogate.envelope.fit import HOLDOUT_EVERY, run_from_row
+    from surrogate.envelope.metrics import SETTLED_PTP, SETTLED_WINDOW_S, STEADY_WINDOW_S
     from surrogate.runtime.predictor import load_predictor
     from surrogate.runtime.rom import load_envelope_model
 

@@ -1,11 +1,11 @@
 """Where the 10-90 % rise of held-out transient runs differs between FE and envelope model.
 
 For each run (dataset row ``sample_index``) over the first burst: the FE envelope (demodulated
-as ``surrogate.rom`` does), the model's envelope (``models/rom-default``), the motor law's
+as ``surrogate.envelope.fit`` does), the model's envelope (``models/rom-default``), the motor law's
 speed^2 (the unbalance force, normalised by its level at switch-off) and the model's
 quasi-static envelope (steady response at the instantaneous speed, no mode dynamics), each
 as a fraction of its own level over the last 5 ms before switch-off; and their 10 % / 90 %
-crossing times as ``surrogate.rom_metrics`` reads them. With ``--harmonic`` also the steady
+crossing times as ``surrogate.envelope.metrics`` reads them. With ``--harmonic`` also the steady
 response along the spin-up: the FE harmonic solve of the row's own scene (same mesh, hysteretic
 loss) at the speeds the motor passes, against the model's steady part A(f) (harmonic NN times
 the learned gain, continued below 100 Hz through the mode), each over its value at the speed
@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from surrogate import rom
 from surrogate.data.store import Store
-from surrogate.rom_metrics import STEADY_WINDOW_S, first_crossing
+from surrogate.envelope import fit as rom
+from surrogate.envelope.metrics import STEADY_WINDOW_S, first_crossing
 from surrogate.runtime.rom import STATES, load_envelope_model
 
 ROOT = Path(__file__).resolve().parents[1]

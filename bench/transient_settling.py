@@ -6,9 +6,9 @@
 For each design (a ``sample_index`` of ``--data``, default ``datasets/transient``) the run's own
 first burst (its kick, then its drive voltage) is held for ``--duration-ms`` with the loss model
 ``--damping`` (default ``hysteretic_band``, as the transient space now uses) and demodulated as
-in training (``surrogate.rom.run_from_row``). For each candidate switch-off time T
+in training (``surrogate.envelope.fit.run_from_row``). For each candidate switch-off time T
 (``--ends-ms``) the card's "steady" level (mean envelope over [T - 5 ms, T),
-``surrogate.rom_metrics``) is compared with the steady state the transient tends to at the
+``surrogate.envelope.metrics``) is compared with the steady state the transient tends to at the
 window's mean speed: a harmonic solve with the same loss model on the transient's own matrices
 (``bench.rom_steady_levels.steady_solves``). Prints per design and T the relative difference
 (center / edge) and the card's ``settled`` flag, the medians and maxima over designs, and the
@@ -39,8 +39,8 @@ SAMPLES = (211, 124, 236, 153, 14, 199)
 def window_levels(t: np.ndarray, env: np.ndarray, omega: np.ndarray, end_s: float,
                   width_s: float = 5e-3) -> tuple[np.ndarray, float, np.ndarray]:
     """(center, edge) mean envelope over [end_s - width_s, end_s), the mean speed there
-    (rad/s), and the card's settled flag per point (``surrogate.rom_metrics``)."""
-    from surrogate.rom_metrics import SETTLED_PTP, SETTLED_WINDOW_S
+    (rad/s), and the card's settled flag per point (``surrogate.envelope.metrics``)."""
+    from surrogate.envelope.metrics import SETTLED_PTP, SETTLED_WINDOW_S
 
     win = (t >= end_s - width_s) & (t < end_s)
     late = (t >= end_s - SETTLED_WINDOW_S) & (t < end_s)
@@ -55,7 +55,7 @@ def measure(row: dict[str, Any], duration_ms: float, ends_ms: list[float], dampi
     from rom_steady_levels import steady_solver
 
     from surrogate.data.worker import run_sample
-    from surrogate.rom import run_from_row
+    from surrogate.envelope.fit import run_from_row
 
     scene = json.loads(row["scene_json"])
     sched = scene["analysis"]["voltage_schedule"]

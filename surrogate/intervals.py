@@ -33,7 +33,7 @@ ceil(level (K + 1) N)-th smallest of the K N pooled scores: the pooled quantile 
 (1 + 1 / K) -- 95.6 % for 161 calibration designs, where the pooled 95 % quantile covered
 92-95 % of new designs.
  :func:`calibrate` computes it from a model's raw predictions;
-:func:`surrogate.interval_calibration.calibrate_model_dir` (``hapticrom models
+:func:`surrogate.calibrate_intervals.calibrate_model_dir` (``hapticrom models
 calibrate-intervals``) does it for a trained model on held-out rows of its own data that it
 never saw, and re-seals the card.
 """

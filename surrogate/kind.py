@@ -4,7 +4,7 @@ Every kind is one record in :data:`surrogate.kinds.KINDS`; nothing else in the p
 on a kind's name. A steady-state kind names a scikit-learn-style estimator class (parameters in
 ``__init__``, ``fit(X, T)``, ``predict(X, return_std=True)`` giving the mean and std of the
 targets of :class:`surrogate.pod.ProfileTargets`) and the function that writes it as the one
-ONNX graph contract of :mod:`surrogate.export`. A kind with a pipeline of its own (the
+ONNX graph contract of :mod:`surrogate.estimators.export`. A kind with a pipeline of its own (the
 transient envelope model) names its ``trainer`` instead.
 """
 
@@ -49,7 +49,7 @@ class SurrogateKind:
         summary: one line for ``--help`` and docs.
         estimator: the estimator class (called as ``estimator(random_state=seed, **options)``).
         export: ``export(estimator, B, b, metadata) -> ONNX bytes`` (input ``x``; outputs
-            ``log_mean``, ``log_std``; see :mod:`surrogate.export`).
+            ``log_mean``, ``log_std``; see :mod:`surrogate.estimators.export`).
         parity_tol: largest |d ln| allowed between the exported graph and the estimator.
         dtype: the graph's input dtype, ``"float32"`` or ``"float64"``.
         std_parity: whether the graph's ``log_std`` is checked against the estimator's std too.

@@ -2,7 +2,7 @@
 
 This is the one place that lists the kinds. ``hapticrom train``, :func:`surrogate.train.train`,
 the model listing and the accuracy study look a kind up here; a kind's estimator, exporter and
-parity tolerance live in its own module (``surrogate/gp.py``, ``nn.py``, ``mlp.py``,
+parity tolerance live in its own module (``surrogate/estimators/gp.py``, ``nn.py``, ``mlp.py``,
 ``lgbm.py``). Adding a kind is one new module defining ``KIND`` plus its line in
 :data:`KINDS` (docs/architecture.md).
 
@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from fieldspec import FieldError
-from surrogate import gp, lgbm, mlp, nn, rom
+from surrogate.envelope import fit as rom
+from surrogate.estimators import gp, lgbm, mlp, nn
 from surrogate.kind import SurrogateKind
 
 __all__ = ["KINDS", "STEADY_KINDS", "get"]
@@ -44,14 +45,15 @@ def _rom_report(card: Mapping[str, Any]) -> list[str]:
 
 
 #: The transient envelope model: identified from transient runs by its own pipeline
-#: (:mod:`surrogate.rom`), written as coefficients (not an ONNX graph).
+#: (:mod:`surrogate.envelope.fit`), written as coefficients (not an ONNX graph).
 ROM = SurrogateKind(name="rom", summary="transient envelope model (sparse identification)",
                     trainer=_train_rom, report=_rom_report)
 
 #: Every kind, by name, in the order ``--help`` lists them.
 KINDS: dict[str, SurrogateKind] = {k.name: k for k in (gp.KIND, nn.KIND, mlp.KIND, lgbm.KIND,
                                                        ROM)}
-#: The kinds of the steady-state pipeline (one ONNX graph contract, :mod:`surrogate.export`).
+#: The kinds of the steady-state pipeline (one ONNX graph contract,
+#: :mod:`surrogate.estimators.export`).
 STEADY_KINDS = tuple(name for name, k in KINDS.items() if k.estimator is not None)
 
 

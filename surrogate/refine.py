@@ -1,6 +1,6 @@
 """Active learning: run new FE samples where a Gaussian process is least certain.
 
-Each round fits the project's GP (:class:`surrogate.gp.GPSurrogateRegressor`) to the log
+Each round fits the project's GP (:class:`surrogate.estimators.gp.GPSurrogateRegressor`) to the log
 center and log edge amplitudes of the dataset, scores a pool of candidate design points of
 the dataset's own space (the next points of its design sequence, so every refined sample is
 an ordinary, reproducible sample of the space), and runs the ``batch`` candidates with the
@@ -24,8 +24,8 @@ import numpy as np
 from surrogate.data.generate import generate
 from surrogate.data.plan import plan_samples
 from surrogate.data.store import Store
+from surrogate.estimators.gp import GPSurrogateRegressor
 from surrogate.features import codes_from_frame
-from surrogate.gp import GPSurrogateRegressor
 from surrogate.runtime.encoding import encode
 from surrogate.train import load_datasets
 

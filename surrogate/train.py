@@ -122,7 +122,7 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
         if manifest.get("band"):
             raise ValueError(f"--data: {path} is a sweep dataset (one row per design over a "
                              "band); these models train on single-frequency rows (sweeps: "
-                             "surrogate.sweep_train, which hapticrom train calls for them)")
+                             "surrogate.sweep.train, which hapticrom train calls for them)")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
         specs = these if specs is None else _merge_specs(specs, these, str(path))
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)

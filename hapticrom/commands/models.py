@@ -35,7 +35,7 @@ def _show(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    from surrogate.interval_calibration import calibrate_model_dir
+    from surrogate.calibrate_intervals import calibrate_model_dir
 
     entry = calibrate_model_dir(args.model, args.data, check_fraction=args.check_fraction,
                                 seed=args.seed, write=not args.dry_run)

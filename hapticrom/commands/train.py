@@ -37,8 +37,8 @@ def _run(args: argparse.Namespace) -> int:
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds
-    from surrogate.sweep_targets import check_not_mixed
-    from surrogate.sweep_train import train_sweep
+    from surrogate.sweep.targets import check_not_mixed
+    from surrogate.sweep.train import train_sweep
     from surrogate.train import train
 
     options = _options(args.options)

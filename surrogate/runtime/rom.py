@@ -2,7 +2,7 @@
 
 ``load_envelope_model(path).simulate(t_s, volts, design)`` gives the vibration envelopes at the
 unit's center and edge (um) for any drive schedule. The model is built from what is known and
-learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
+learns only a small dynamic remainder (coefficients from ``surrogate.envelope.fit``):
 
 1. **Motor speed** omega(t), rad/s, from the voltage schedule by the one ERM law of
    :mod:`motorlaw` (the solver's own), solved exactly for the voltage held between samples.

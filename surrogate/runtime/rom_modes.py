@@ -1,5 +1,5 @@
 """The envelope model's dynamic correction: damped modes seen from the frame rotating with the
-force (numpy only; used by :mod:`surrogate.runtime.rom` and its fit, :mod:`surrogate.rom`).
+force (numpy only; used by :mod:`surrogate.runtime.rom` and its fit, :mod:`surrogate.envelope.fit`).
 
 Each point has one or two modes lambda_k = -sigma_k + i 2 pi f_k (sigma_k > 0, 1/s) sharing
 the steady response A(omega):

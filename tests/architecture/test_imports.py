@@ -31,7 +31,8 @@ LAZY_MODULES = {
     "distributed": "dask, the `datasets` extra: only the Dask backend needs it",
     "tqdm": "progress bars, drawn only on a terminal",
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
-    "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it (surrogate/lgbm.py)",
+    "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it "
+                "(surrogate/estimators/lgbm.py)",
 }
 
 #: (file, imported module) -> reason, for project modules imported inside a function.

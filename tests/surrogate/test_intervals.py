@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from synthetic import make_dataset
 
-from surrogate.interval_calibration import _write_card, calibrate_model_dir
+from surrogate.calibrate_intervals import _write_card, calibrate_model_dir
 from surrogate.intervals import Z95, calibrate, conformal_quantile, coverage
 from surrogate.runtime import ModelFileError, PredictorInputError, load_predictor
 from surrogate.runtime.card import verify_model_dir

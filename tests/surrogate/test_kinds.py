@@ -10,7 +10,7 @@ import pytest
 from fieldspec import FieldError
 from hapticrom.cli import main
 from surrogate import kinds
-from surrogate.mlp import MLPBaselineRegressor, export_mlp
+from surrogate.estimators.mlp import MLPBaselineRegressor, export_mlp
 from surrogate.runtime.models import load_model
 from surrogate.runtime.predictor import Predictor, make_session
 

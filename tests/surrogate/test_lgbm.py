@@ -11,7 +11,7 @@ import pytest
 
 from hapticrom.cli import main
 from surrogate import kinds
-from surrogate.lgbm import LightGBMRegressor, export_lgbm
+from surrogate.estimators.lgbm import LightGBMRegressor, export_lgbm
 from surrogate.runtime.models import load_model
 from surrogate.runtime.predictor import Predictor, make_session
 

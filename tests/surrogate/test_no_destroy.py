@@ -86,7 +86,7 @@ def test_merge_never_writes_into_an_input(synthetic_dataset, capsys):
 
 
 def test_the_library_refuses_before_training(synthetic_dataset, tmp_path):
-    from surrogate.rom import train as train_rom
+    from surrogate.envelope.fit import train as train_rom
     from surrogate.train import train as train_surrogate
 
     user = tmp_path / "user"

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from motorlaw import SpeedLaw
-from surrogate.rom_metrics import envelope_metrics, fall_time, first_crossing
+from surrogate.envelope.metrics import envelope_metrics, fall_time, first_crossing
 from surrogate.runtime.card import read_card
 from surrogate.runtime.rom import (
     RomInputError,
@@ -135,7 +135,7 @@ def test_demodulated_envelope_of_a_spin_up_from_rest_starts_at_zero():
     demodulation recovers the envelope A from t = 0 (the odd-reflection extension made a
     spurious 9 % of the steady level at t = 0 and 9 % over the first 20 ms)."""
     from motorlaw import VoltageSchedule, speed_and_phase
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     t = np.arange(0.0, 0.3, 2.5e-4)
     law = SpeedLaw(tau_spinup_s=0.034, tau_spindown_s=0.03)
@@ -213,7 +213,7 @@ def test_steady_running_is_the_harmonic_model_times_the_learned_gain(model):
 
 
 def test_card_reports_every_target_and_the_held_out_runs_reproduce(model):
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     card = read_card(SHIPPED)
     summary = card["metrics"]["held_out"]["summary"]
@@ -229,7 +229,7 @@ def test_card_reports_every_target_and_the_held_out_runs_reproduce(model):
     df = pd.read_parquet(DATASET)
     df = df[(df["status"] == "ok") & df["sample_index"].isin(sorted(rows)[:4])]
     runs = [rom.run_from_row(r, model.design_names)[0] for r in df.to_dict("records")]
-    from surrogate.rom_metrics import evaluate
+    from surrogate.envelope.metrics import evaluate
 
     for row in evaluate(model, runs)["runs"]:  # the card's per-run metrics are the model's
         ref = rows[row["sample_index"]]
@@ -244,7 +244,7 @@ def test_card_reports_every_target_and_the_held_out_runs_reproduce(model):
 def test_identification_recovers_a_known_mode(model):
     """Synthetic runs made by the model's own equations with a known mode and gain are
     identified back (intercept-only features)."""
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     t = np.arange(0.0, 0.2, 2.5e-4)
     schedules = [np.where(t < 0.06, 3.3, 0.0), np.where(t < 0.01, 4.5, 2.5),

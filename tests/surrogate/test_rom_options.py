@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from motorlaw import SpeedLaw
-from surrogate.rom_metrics import envelope_metrics, summarise
+from surrogate.envelope.metrics import envelope_metrics, summarise
 from surrogate.runtime.rom import load_envelope_model, model_from_parts, motor_speed
 from surrogate.runtime.rom_modes import mode_response, modes_response, params_for
 from tests.surrogate.rom_cases import DESIGN, SHIPPED
@@ -27,7 +27,7 @@ def model():
 
 def _synthetic_runs(model, truths):
     """Runs made by the model's own equations, one per (schedule, truth) pair."""
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     t = np.arange(0.0, 0.2, 2.5e-4)
     schedules = [np.where(t < 0.06, 3.3, 0.0), np.where(t < 0.01, 4.5, 2.5),
@@ -46,7 +46,7 @@ def _synthetic_runs(model, truths):
 
 
 def test_without_a_learned_gain_the_mode_is_identified_and_the_gain_stays_one(model):
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     truth = [math.log(70.0), 48.0, 0.0, 0.0]
     runs, amps = _synthetic_runs(model, [truth])
@@ -63,7 +63,7 @@ def test_without_a_learned_gain_the_mode_is_identified_and_the_gain_stays_one(mo
 def test_one_mode_map_per_group_identifies_two_different_modes(model):
     """Runs of two groups (block one-hot intercepts, as ``group_by`` builds them) with
     different modes: each group's block recovers its own mode."""
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     truths = [[math.log(60.0), 45.0, 0.0, 0.0], [math.log(150.0), 80.0, 0.0, 0.0]]
     runs, amps = _synthetic_runs(model, truths)
@@ -143,7 +143,7 @@ def _intercept_model(row):
 def test_two_modes_are_identified_back(model):
     """Runs made by the two-mode equations: the per-run starts about the one-mode fit and
     the refinements recover both modes and the share."""
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     runs, amps = _synthetic_runs(model, [TWO_MODES])
     weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, model.grid_hz,
@@ -218,7 +218,7 @@ def test_one_mode_output_is_unchanged(model):
 
 @pytest.mark.parametrize("bad", [3, 0, True, 2.0, "2"])
 def test_bad_modes_are_refused_by_name(model, tmp_path, bad):
-    from surrogate import rom
+    from surrogate.envelope import fit as rom
 
     with pytest.raises(ValueError, match=r"^modes = .*allowed 1 or 2"):
         rom.train([tmp_path], tmp_path / "out", modes=bad)

@@ -1,4 +1,4 @@
-"""The factored band basis of sweep models (surrogate.sweep_basis): exact at full rank, within
+"""The factored band basis of sweep models (surrogate.sweep.basis): exact at full rank, within
 its error bound at the chosen rank, and the same in the graph, in torch and in numpy."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import pytest
 import torch
 from synthetic_sweep import make_sweep_dataset
 
-from surrogate.sweep_basis import factor_block, tail_error
-from surrogate.sweep_export import BandDecoder
-from surrogate.sweep_targets import BandTargets, load_sweep_datasets
+from surrogate.sweep.basis import factor_block, tail_error
+from surrogate.sweep.export import BandDecoder
+from surrogate.sweep.targets import BandTargets, load_sweep_datasets
 
 
 @pytest.fixture(scope="module")

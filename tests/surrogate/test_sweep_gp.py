@@ -10,11 +10,11 @@ from synthetic_sweep import BAND_HZ, GRID_MM, make_sweep_dataset
 from fieldspec import FieldError
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor, make_session
-from surrogate.sweep_export import reference_log_outputs
-from surrogate.sweep_gp import JITTER, SweepGP, fit_sweep_gp, linearised_log_std, split_gp_options
-from surrogate.sweep_gp_export import export_sweep_gp, gp_parity
-from surrogate.sweep_targets import load_sweep_datasets, log_magnitudes, log_output_columns
-from surrogate.sweep_train import train_sweep
+from surrogate.sweep.export import reference_log_outputs
+from surrogate.sweep.gp import JITTER, SweepGP, fit_sweep_gp, linearised_log_std, split_gp_options
+from surrogate.sweep.gp_export import export_sweep_gp, gp_parity
+from surrogate.sweep.targets import load_sweep_datasets, log_magnitudes, log_output_columns
+from surrogate.sweep.train import train_sweep
 from surrogate.train import split
 
 OPTIONS = {"centre_modes": 6, "scale": "block"}

@@ -12,14 +12,14 @@ from synthetic_sweep import BAND_HZ, GRID_MM, make_sweep_dataset
 from fieldspec import FieldError
 from surrogate.runtime.encoding import PredictorInputError, encode
 from surrogate.runtime.predictor import Predictor, load_predictor, make_session
-from surrogate.sweep_export import export_sweep_nn, member_targets, reference_log_outputs
-from surrogate.sweep_targets import (
+from surrogate.sweep.export import export_sweep_nn, member_targets, reference_log_outputs
+from surrogate.sweep.targets import (
     BandTargets,
     check_not_mixed,
     load_sweep_datasets,
     log_magnitudes,
 )
-from surrogate.sweep_train import fit_sweep, train_sweep
+from surrogate.sweep.train import fit_sweep, train_sweep
 from surrogate.train import split
 
 OPTIONS = {"hidden": (16, 16), "n_members": 3, "max_epochs": 60, "centre_modes": 6,
@@ -158,7 +158,7 @@ def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
 
 def test_intervals_of_a_sweep_model_calibrate_on_its_held_out_designs(sweep_data, sweep_model,
                                                                      tmp_path):
-    from surrogate.interval_calibration import calibrate_model_dir
+    from surrogate.calibrate_intervals import calibrate_model_dir
 
     # the designs are the exchangeable units: 5 calibration designs cannot give a 95 % factor
     with pytest.raises(ValueError, match="5 calibration groups: a 95% factor needs more than 19"):

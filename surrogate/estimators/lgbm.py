@@ -4,13 +4,13 @@ The same targets as every steady-state kind (log center amplitude and the POD co
 the log profile, :class:`surrogate.pod.ProfileTargets`), one LightGBM booster per target.
 Trees have no spread to estimate their own error from: ``log_std`` is the RMS residual of each
 target on a held-out tenth of the training rows (boosters refitted on that split first, then on
-all rows), homoscedastic like the MLP baseline's (:mod:`surrogate.mlp`).
+all rows), homoscedastic like the MLP baseline's (:mod:`surrogate.estimators.mlp`).
 
 Exported as one ``ai.onnx.ml`` ``TreeEnsembleRegressor`` node (every booster's trees, each
 tagged with its target) on float64 input with float64 thresholds and leaf values, so the graph
 splits exactly where LightGBM does (the node's sum comes out as float32, opset 3 has no other
 output type: parity about 1e-6 in log amplitude); then ``log_mean = raw @ B + b`` in float64
-and the constant std, so the graph has the one contract of :mod:`surrogate.export`.
+and the constant std, so the graph has the one contract of :mod:`surrogate.estimators.export`.
 ``lightgbm`` (the ``bench`` extra) is imported when a model is fitted, not when this module is:
 the kind is registered either way and says what to install when it is used without it.
 """
@@ -25,9 +25,9 @@ from onnx import TensorProto, helper, numpy_helper
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from surrogate.export import finish_model
+from surrogate.estimators.export import finish_model
+from surrogate.estimators.params import check_number, training_data
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_number, training_data
 
 __all__ = ["KIND", "LightGBMRegressor", "export_lgbm"]
 

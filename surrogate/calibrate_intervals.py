@@ -15,7 +15,7 @@ from surrogate.intervals import calibrate, coverage, residuals
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, load_predictor
-from surrogate.sweep_targets import load_sweep_datasets, pair_rows
+from surrogate.sweep.targets import load_sweep_datasets, pair_rows
 from surrogate.train import load_datasets, split
 
 __all__ = ["calibrate_model_dir"]
@@ -44,7 +44,7 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
     raw = load_predictor(root, calibrated=False)
     extra = list(raw.extra_outputs)
     sweep = "representation" in card  # a sweep model: rows are designs, scored at every
-    rows = (load_sweep_datasets(paths) if sweep  # band frequency (surrogate.sweep_train)
+    rows = (load_sweep_datasets(paths) if sweep  # band frequency (surrogate.sweep.train)
             else load_datasets(paths, outputs=extra))
     for p, s, now in zip(paths, sources, rows.sources, strict=True):
         if manifest_sha256(p) != s["manifest_sha256"] and (

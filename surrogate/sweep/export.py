@@ -1,12 +1,13 @@
 """The in-graph decode of a sweep model: ensemble heads -> complex band -> the requested
-frequency -> ln magnitudes, exported as the one graph contract of :mod:`surrogate.export`.
+frequency -> ln magnitudes, exported as the one graph contract of
+:mod:`surrogate.estimators.export`.
 
     x (batch, d + 1): encoded design features, then the encoded frequency (its last column)
       -> each member's targets y = [ln s, POD coefficients]       (members, batch, 1 + k)
       -> t = (f - f_0) / step from the frequency's feature, clamped to [0, n_f - 1];
          i = min(floor(t), n_f - 2), w = t - i
       -> per POD block j (centre + edge; the profile beyond the edge), with the block's
-         factored basis (:mod:`surrogate.sweep_basis`: per group g of its modes
+         factored basis (:mod:`surrogate.sweep.basis`: per group g of its modes
          modes[f][g] = A_g[f] @ Psi[:S_g], mean[f] = a[f] @ Psi):
          v = sum_g [(1 - w) y_g, w y_g] @ [A_g[i]; A_g[i + 1]] (one gather of both grid
          points, 2 k_g x S_g per row, and the interpolation inside the product, padded to S)
@@ -20,7 +21,7 @@ Per row the decode gathers sum_g 2 k_g S_g numbers of each block (not the band's
 modes at two grid points, with the zeros off the blocks) and does 2 M (sum_g 2 k_g S_g + S L_j)
 FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
 members' target scaling is folded into their last layer. Psi carries the per-location
-weights of :class:`surrogate.sweep_targets.BandTargets`, so the graph needs nothing outside
+weights of :class:`surrogate.sweep.targets.BandTargets`, so the graph needs nothing outside
 it. :func:`reference_log_outputs` is the graph-free numpy version (through the same factored
 basis; training checks the exported graph against it).
 """
@@ -33,9 +34,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from surrogate.export import export_module
-from surrogate.nn import EnsembleModule, MLPEnsembleRegressor
-from surrogate.sweep_targets import (
+from surrogate.estimators.export import export_module
+from surrogate.estimators.nn import EnsembleModule, MLPEnsembleRegressor
+from surrogate.sweep.targets import (
     TINY,
     BandTargets,
     Z,
@@ -51,7 +52,7 @@ __all__ = ["BandDecoder", "SweepEnsembleModule", "export_sweep_nn", "magnitude_e
 class BandDecoder(torch.nn.Module):
     """Member targets (M, b, 1 + k) and a fractional band index t (b,) -> log outputs
     (M, b, 3 + m [+ m]) (``normal``: with the ln |u_z| profile block), through the factored
-    basis of each block (:attr:`surrogate.sweep_targets.BandTargets.factors`)."""
+    basis of each block (:attr:`surrogate.sweep.targets.BandTargets.factors`)."""
 
     def __init__(self, targets: BandTargets, normal: bool = False) -> None:
         super().__init__()
@@ -196,8 +197,8 @@ def export_sweep_nn(estimator: MLPEnsembleRegressor, targets: BandTargets, norma
 
 def magnitude_error(decoder: BandDecoder, response: np.ndarray, *, per_step: int = 8,
                     val_every: int = 8, centre_weight: float = 1.0) -> Any:
-    """The ``error`` of :meth:`surrogate.nn.MLPEnsembleRegressor.refit` that trains the members
-    through the decode on what users meet: squared errors of ln |u| at band frequencies (a
+    """The ``error`` of :meth:`surrogate.estimators.nn.MLPEnsembleRegressor.refit` that trains the
+    members through the decode on what users meet: squared errors of ln |u| at band frequencies (a
     random ``per_step`` of them per step, every ``val_every``-th one for validation) of the
     centre, the edge and the profile (each a third of the weight; with the normal profile a
     quarter each; ``centre_weight`` multiplies the centre's), against ``response``

@@ -1,12 +1,12 @@
 """Train an NN or GP surrogate on sweep datasets (``hapticrom train --data SWEEP --kind nn``
 or ``--kind gp``, which calls :func:`train_sweep` when every dataset is a sweep dataset).
-The GP's fit, variance and float64 graph: :mod:`surrogate.sweep_gp`,
-:mod:`surrogate.sweep_gp_export`; what follows is the NN's, and the pipeline both share.
+The GP's fit, variance and float64 graph: :mod:`surrogate.sweep.gp`,
+:mod:`surrogate.sweep.gp_export`; what follows is the NN's, and the pipeline both share.
 
 The model learns, per design, the complex-band representation of
-:class:`surrogate.sweep_targets.BandTargets` and ships it through the one graph contract of
-:mod:`surrogate.export` (the decode to the requested frequency is inside the graph,
-:mod:`surrogate.sweep_export`): its inputs are the space's design inputs plus
+:class:`surrogate.sweep.targets.BandTargets` and ships it through the one graph contract of
+:mod:`surrogate.estimators.export` (the decode to the requested frequency is inside the graph,
+:mod:`surrogate.sweep.export`): its inputs are the space's design inputs plus
 ``frequency_hz`` over the band, so the predictor, the planner and ``hapticrom predict`` use it
 as they use a single-frequency model.
 
@@ -20,7 +20,7 @@ as they use a single-frequency model.
   ``centre_weight`` (default 6: the centre's squared ln error counts six times the edge's
   and six times the whole profile's; docs/sweep-models.md has the measurement) drive the
   second stage; ``spatial_tol`` (default 1e-3) bounds the relative error of the factored
-  basis the graph decodes through (:mod:`surrogate.sweep_basis`; 0: exact); every other
+  basis the graph decodes through (:mod:`surrogate.sweep.basis`; 0: exact); every other
   option is the estimator's (``hidden`` defaults to 256 x 256 here).
 * The card's metrics and interval calibration are computed on (design, band frequency) pairs
   *through the exported graph and the run-time encoder*, as for single-frequency models
@@ -37,22 +37,22 @@ from typing import Any
 import numpy as np
 
 from fieldspec import FieldError
+from surrogate.estimators.params import check_choice, check_number
 from surrogate.intervals import calibrate, residuals
 from surrogate.kinds import get as get_kind
-from surrogate.params import check_choice, check_number
 from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
-from surrogate.sweep_export import (
+from surrogate.sweep.export import (
     BandDecoder,
     export_sweep_nn,
     magnitude_error,
     member_targets,
     reference_log_outputs,
 )
-from surrogate.sweep_gp import fit_sweep_gp, split_gp_options
-from surrogate.sweep_gp_export import export_sweep_gp, gp_parity
-from surrogate.sweep_targets import BandTargets, SweepData, load_sweep_datasets, pair_rows
+from surrogate.sweep.gp import fit_sweep_gp, split_gp_options
+from surrogate.sweep.gp_export import export_sweep_gp, gp_parity
+from surrogate.sweep.targets import BandTargets, SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import (
     _calibration_rows,
     _plain,
@@ -147,9 +147,9 @@ def _parity(est: Any, targets: BandTargets, predictor: Predictor, data: SweepDat
 def fit_sweep(data: SweepData, designs: np.ndarray, *, seed: int = 0,
               n_modes: int | None = None, normal: bool = False,
               options: dict[str, Any] | None = None) -> tuple[Any, BandTargets]:
-    """(fitted :class:`surrogate.nn.MLPEnsembleRegressor`, fitted :class:`BandTargets`) of
-    the rows ``designs`` of ``data`` (``options``: the sweep options of the module docstring
-    and the estimator's)."""
+    """(fitted :class:`surrogate.estimators.nn.MLPEnsembleRegressor`, fitted
+    :class:`BandTargets`) of the rows ``designs`` of ``data`` (``options``: the sweep options of
+    the module docstring and the estimator's)."""
     ours, est_options = _split_options(dict(options or {}))
     X = encode(data.codes[designs], data.specs)
     targets = BandTargets(centre_modes=ours["centre_modes"], profile_modes=n_modes or 128,
@@ -192,7 +192,7 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     """Train an NN or GP sweep model on the sweep datasets ``paths`` and write ``out``
     (arguments as :func:`surrogate.train.train`; the split and the calibration rows are
     designs); return its card. ``hapticrom train`` calls it when every dataset is a sweep
-    dataset. The GP: :mod:`surrogate.sweep_gp` (``options``: its ``GP_OPTIONS``)."""
+    dataset. The GP: :mod:`surrogate.sweep.gp` (``options``: its ``GP_OPTIONS``)."""
     spec = get_kind(kind)
     if kind not in SWEEP_KINDS:
         raise FieldError("--kind", f"--kind {kind}: sweep datasets train the "

@@ -121,8 +121,8 @@ def summarise(rows: Sequence[dict[str, Any]]) -> dict[str, float]:
 
 
 def evaluate(model: Any, runs: Sequence[Any]) -> dict[str, Any]:
-    """Per-run metrics of ``model`` (an ``EnvelopeModel``) on FE ``runs`` (``surrogate.rom.Run``)
-    and their summary."""
+    """Per-run metrics of ``model`` (an ``EnvelopeModel``) on FE ``runs``
+    (``surrogate.envelope.fit.Run``) and their summary."""
     rows = []
     for run in runs:
         sim = model.simulate(run.t, run.volts, run.design, extrapolate=True)

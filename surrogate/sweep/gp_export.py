@@ -1,11 +1,11 @@
-"""The sweep GP (:class:`surrogate.sweep_gp.SweepGP`) as one float64 ONNX graph of the one
-graph contract of :mod:`surrogate.export` (input ``x``: design features, then the encoded
+"""The sweep GP (:class:`surrogate.sweep.gp.SweepGP`) as one float64 ONNX graph of the one
+graph contract of :mod:`surrogate.estimators.export` (input ``x``: design features, then the encoded
 frequency; outputs ``log_mean``, ``log_std``).
 
     x -> K* = amp * Matern_5/2(x / ls, X / ls)                        (batch, N)
       -> mean targets y = y_mean + K* @ alpha                          (batch, T)
       -> v = amp - |a|^2 + |a @ L_B^-T|^2 + noise, a = K*[:, inducing] @ L_m^-T   (batch,)
-      -> the decode of :class:`surrogate.sweep_export.BandDecoder` (cast to float64): the
+      -> the decode of :class:`surrogate.sweep.export.BandDecoder` (cast to float64): the
          complex band at the requested frequency, ln |u| -> log_mean
       -> log_std: v propagated to first order, log_std_p^2 = v (s_0^2 + g_p' C_p(t) g_p) with
          g_p = z_p / |z_p|^2 (the gradient of ln |u_p| in the six component parts z_p) and
@@ -14,12 +14,12 @@ frequency; outputs ``log_mean``, ``log_std``).
 
 C_p(t) is quadratic in the interpolation weight w: (1 - w)^2 D[i] + w^2 D[i + 1]
 + w (1 - w) H[i], with D (the band's grid) and H (neighbouring grid points) tabulated once
-from :meth:`surrogate.sweep_targets.BandTargets.band_basis` (one extra pair: the centre-edge
+from :meth:`surrogate.sweep.targets.BandTargets.band_basis` (one extra pair: the centre-edge
 covariance for the edge / centre column). So the std costs a few hundred flops per row beside
 the decode, and this module uses only the decoder's public behaviour (``components``,
 ``log_outputs``). :func:`gp_parity` checks the graph against the numpy rebuild
-(:meth:`SweepGP.predict`, :func:`surrogate.sweep_export.reference_log_outputs`,
-:func:`surrogate.sweep_gp.linearised_log_std`, all float64).
+(:meth:`SweepGP.predict`, :func:`surrogate.sweep.export.reference_log_outputs`,
+:func:`surrogate.sweep.gp.linearised_log_std`, all float64).
 """
 
 from __future__ import annotations
@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 import torch
 
-from surrogate.export import export_module
+from surrogate.estimators.export import export_module
 from surrogate.runtime.encoding import encode
-from surrogate.sweep_export import BandDecoder, reference_log_outputs
-from surrogate.sweep_gp import SweepGP, linearised_log_std
-from surrogate.sweep_targets import TINY, BandTargets, SweepData, Z, pair_rows
+from surrogate.sweep.export import BandDecoder, reference_log_outputs
+from surrogate.sweep.gp import SweepGP, linearised_log_std
+from surrogate.sweep.targets import TINY, BandTargets, SweepData, Z, pair_rows
 
 __all__ = ["GP_PARITY_TOL", "SweepGPModule", "covariance_tables", "export_sweep_gp",
            "gp_parity"]
@@ -163,8 +163,8 @@ def reference_gp_outputs(est: SweepGP, targets: BandTargets, X: np.ndarray, inde
                          normal: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Graph-free outputs at design features ``X`` (n, d) and band grid indices ``index`` (n,):
     (log_mean through the decoder itself run eagerly in float64, log_mean through the numpy
-    decode of :func:`surrogate.sweep_export.reference_log_outputs`, log_std of
-    :func:`surrogate.sweep_gp.linearised_log_std` at the decoder's components), each (n, K),
+    decode of :func:`surrogate.sweep.export.reference_log_outputs`, log_std of
+    :func:`surrogate.sweep.gp.linearised_log_std` at the decoder's components), each (n, K),
     from the numpy GP."""
     y, v = est.predict(X)
     decoder = BandDecoder(targets, normal).double()

@@ -1,12 +1,13 @@
 """A Gaussian process on sweep datasets (``hapticrom train --data SWEEP --kind gp``).
 
-Per design the GP learns the targets of :class:`surrogate.sweep_targets.BandTargets` (ln s and
+Per design the GP learns the targets of :class:`surrogate.sweep.targets.BandTargets` (ln s and
 the POD coefficients of the weighted complex band), centred and scaled (``y_mean_``,
 ``y_std_``), with ONE kernel shared by every output:
 
     k(x, x') = amp * Matern_5/2(|(x - x') / ls|) + noise * [x == x']
 
-(ARD: one length scale per design feature, features in [0, 1]; :func:`surrogate.gp.ard_kernel`).
+(ARD: one length scale per design feature, features in [0, 1];
+:func:`surrogate.estimators.gp.ard_kernel`).
 Because the outputs share the kernel they share the posterior variance too, in scaled units:
 the coefficient j's variance is ``v(x) * y_std_[j]^2``. The scale (``scale`` option): "block"
 (default) divides ln s by its std and each POD block's coefficients by one common scale (the
@@ -31,7 +32,7 @@ docs/sweep-models.md).
   conformally (:mod:`surrogate.intervals`).
 
 :func:`linearised_log_std` propagates v(x) through the decode to ln |u| (a first-order
-expansion of ln |u| in the targets); :mod:`surrogate.sweep_gp_export` does the same in the graph.
+expansion of ln |u| in the targets); :mod:`surrogate.sweep.gp_export` does the same in the graph.
 """
 
 from __future__ import annotations
@@ -46,10 +47,10 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import Kernel
 
-from surrogate.gp import ard_kernel
-from surrogate.params import check_choice, check_number
+from surrogate.estimators.gp import ard_kernel
+from surrogate.estimators.params import check_choice, check_number
 from surrogate.runtime.encoding import encode
-from surrogate.sweep_targets import TINY, BandTargets, SweepData, Z
+from surrogate.sweep.targets import TINY, BandTargets, SweepData, Z
 
 __all__ = ["GP_OPTIONS", "JITTER", "SCALES", "SweepGP", "fit_sweep_gp", "linearised_log_std",
            "split_gp_options"]

@@ -1,14 +1,15 @@
 """A scikit-learn MLP baseline: one ``MLPRegressor`` on standardised inputs and targets.
 
-The peer of the NN ensemble (:mod:`surrogate.nn`): the same targets (log center amplitude and
-the POD coefficients of the log profile), one network instead of an ensemble, and therefore no
-spread to estimate its own error from. Its ``log_std`` is the held-in residual RMS of each
-target (homoscedastic: the same for every design), an honest but coarse error bar.
+The peer of the NN ensemble (:mod:`surrogate.estimators.nn`): the same targets (log center
+amplitude and the POD coefficients of the log profile), one network instead of an ensemble, and
+therefore no spread to estimate its own error from. Its ``log_std`` is the held-in residual RMS
+of each target (homoscedastic: the same for every design), an honest but coarse error bar.
 
 Exported with skl2onnx (the converter of ``StandardScaler`` and ``MLPRegressor`` is exact up
 to float32 rounding); the target scaling and the output map of
 :class:`surrogate.pod.ProfileTargets` are appended as ONNX nodes, so the graph has the one
-contract of :mod:`surrogate.export` (input ``x`` float32; outputs ``log_mean``, ``log_std``).
+contract of :mod:`surrogate.estimators.export` (input ``x`` float32; outputs ``log_mean``,
+``log_std``).
 """
 
 from __future__ import annotations
@@ -27,9 +28,9 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from surrogate.export import finish_model
+from surrogate.estimators.export import finish_model
+from surrogate.estimators.params import check_choice, check_number, training_data
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_choice, check_number, training_data
 
 __all__ = ["KIND", "MLPBaselineRegressor", "export_mlp"]
 

@@ -25,13 +25,13 @@ from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, Matern, WhiteKernel
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from surrogate.export import export_gp
+from surrogate.estimators.export import export_gp
+from surrogate.estimators.params import check_choice, check_number
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_choice, check_number
 
 __all__ = ["KERNELS", "KIND", "POD_MODES", "GPSurrogateRegressor"]
 
-#: Kernels offered; both export to ONNX (surrogate.export) with a parity test each.
+#: Kernels offered; both export to ONNX (surrogate.estimators.export) with a parity test each.
 KERNELS = ("rbf", "matern52")
 #: Length scales on features scaled to [0, 1]: below 0.05 a feature would vary faster than
 #: any affordable sample spacing resolves (a GP then degenerates to white noise); above 1e3

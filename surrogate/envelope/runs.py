@@ -1,4 +1,4 @@
-"""FE transient runs for the envelope model's fit (``surrogate.rom``): the rows of datasets
+"""FE transient runs for the envelope model's fit (``surrogate.envelope.fit``): the rows of datasets
 generated from ``datasets/spaces/transient.toml`` read, their drive rebuilt and their
 displacement histories demodulated with the rotor angle into envelopes. Nothing here imports
 the solver: it reads stored rows only.

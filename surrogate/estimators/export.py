@@ -55,15 +55,16 @@ def finish_model(model: onnx.ModelProto, metadata: Mapping[str, Any]) -> bytes:
 
 def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
               metadata: Mapping[str, Any]) -> bytes:
-    """ONNX bytes of a fitted :class:`surrogate.nn.MLPEnsembleRegressor` (float32 input)."""
+    """ONNX bytes of a fitted :class:`surrogate.estimators.nn.MLPEnsembleRegressor` (float32
+    input)."""
     return export_module(estimator.to_module(B, b), estimator.n_features_in_, metadata)
 
 
 def export_module(module: Any, n_features: int, metadata: Mapping[str, Any],
                   dtype: str = "float32") -> bytes:
     """ONNX bytes of a torch module ``x (batch, n_features) dtype -> (log_mean, log_std)``
-    (the NN ensembles: :func:`export_nn`, the sweep models of :mod:`surrogate.sweep_export`;
-    ``dtype`` "float64": the sweep GP of :mod:`surrogate.sweep_gp_export`)."""
+    (the NN ensembles: :func:`export_nn`, the sweep models of :mod:`surrogate.sweep.export`;
+    ``dtype`` "float64": the sweep GP of :mod:`surrogate.sweep.gp_export`)."""
     # Lazy: torch costs 3.9 s to import; the GP's paths (surrogate.refine) need none of it.
     import torch
 
@@ -141,7 +142,7 @@ def _gp_nodes(p: dict[str, Any], t: int) -> tuple[list[Any], dict[str, np.ndarra
 
 def export_gp(estimator: Any, B: np.ndarray, b: np.ndarray,
               metadata: Mapping[str, Any]) -> bytes:
-    """ONNX bytes (float64 input) of a fitted :class:`surrogate.gp.GPSurrogateRegressor`.
+    """ONNX bytes (float64 input) of a fitted :class:`surrogate.estimators.gp.GPSurrogateRegressor`.
 
     Per target, the graph computes exactly what scikit-learn's ``predict(return_std=True)``
     does::

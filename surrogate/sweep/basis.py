@@ -1,7 +1,7 @@
 """The band basis of a sweep model factored for a cheap decode: per POD block, a spatial basis
 shared by every band frequency, and per group of modes its own number of spatial vectors.
 
-A block of :class:`surrogate.sweep_targets.BandTargets` rebuilds the weighted normalised
+A block of :class:`surrogate.sweep.targets.BandTargets` rebuilds the weighted normalised
 components of its ``L`` values (locations x 6 parts) at band frequency ``f`` as
 ``mean[f] + c @ modes[f]`` with ``modes[f]`` of shape (k, L). Factored::
 

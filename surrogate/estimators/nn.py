@@ -21,9 +21,9 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from surrogate.export import export_nn
+from surrogate.estimators.export import export_nn
+from surrogate.estimators.params import check_number, training_data
 from surrogate.kind import SurrogateKind
-from surrogate.params import check_number, training_data
 
 __all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor"]
 

@@ -36,16 +36,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motorlaw
-from surrogate import rom_card
-from surrogate.registry import check_model_out, write_model
-from surrogate.rom_card import (
+from surrogate.envelope import card as rom_card
+from surrogate.envelope.card import (
     COEFFICIENTS_FILE,
     HARMONIC_CARD_FILE,
     HARMONIC_GRAPH_FILE,
     HOLDOUT_EVERY,
 )
-from surrogate.rom_metrics import evaluate
-from surrogate.rom_runs import Run, complex_envelopes, load_runs, run_from_row, schedule_volts
+from surrogate.envelope.metrics import evaluate
+from surrogate.envelope.runs import Run, complex_envelopes, load_runs, run_from_row, schedule_volts
+from surrogate.registry import check_model_out, write_model
 from surrogate.runtime.card import read_card
 from surrogate.runtime.encoding import n_features
 from surrogate.runtime.predictor import load_predictor
@@ -60,7 +60,7 @@ from surrogate.runtime.rom import (
 from surrogate.runtime.rom_modes import envelope_from_params, params_for
 from surrogate.runtime.rom_steady import steady_from_params
 
-# the runs' reading lives in surrogate.rom_runs; re-exported here, where the fit's callers look
+# the runs' reading lives in surrogate.envelope.runs; re-exported here, where the fit's callers look
 __all__ = ["Run", "complex_envelopes", "fit_weights", "load_runs", "run_from_row",
            "schedule_volts", "train"]
 

@@ -15,8 +15,8 @@ design, a few numbers from which the whole complex band is rebuilt linearly:
 The response at a frequency between grid points is the linear interpolation of the complex
 components (index floor + weight, clamped to the band); a magnitude is
 sqrt(sum over components of |u_c|^2). The run-time graph does the same
-(:mod:`surrogate.sweep_export`), so a sweep model meets the one graph contract of
-:mod:`surrogate.export`: ``x`` with ``frequency_hz`` as its last input in,
+(:mod:`surrogate.sweep.export`), so a sweep model meets the one graph contract of
+:mod:`surrogate.estimators.export`: ``x`` with ``frequency_hz`` as its last input in,
 ln [centre, edge, normalized edge, profile...] out.
 
 Arrays: ``response`` (n, n_f, P, 6) float32 [um], P = 1 + n_p locations (0 the centre,
@@ -41,7 +41,7 @@ from surrogate.features import codes_from_frame, input_specs
 from surrogate.pod import POD
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.encoding import InputSpec
-from surrogate.sweep_basis import factor_block
+from surrogate.sweep.basis import factor_block
 from surrogate.train import _edge_radius, _merge_specs
 
 __all__ = ["FREQUENCY_INPUT", "BandTargets", "SweepData", "check_not_mixed", "frequency_spec",
@@ -194,11 +194,11 @@ class BandTargets:
     and the edge (``centre_modes``: they are few numbers and need few modes), and the profile
     beyond the edge (``profile_modes``: the wave pattern over 40 mm needs many more). Each
     block's basis is then factored through a spatial basis shared by the band's frequencies
-    (:mod:`surrogate.sweep_basis`, relative error of the weighted components on the fitting
+    (:mod:`surrogate.sweep.basis`, relative error of the weighted components on the fitting
     designs at most ``spatial_tol``; 0 keeps every spatial vector: exact), and the factored
     basis is the model's: :meth:`components` and the graph rebuild through it.
     Fitted: ``weights_`` (P,) per-location weights, ``pods`` (two
-    :class:`surrogate.pod.POD`), ``factors`` (two :class:`surrogate.sweep_basis.SpatialFactor`),
+    :class:`surrogate.pod.POD`), ``factors`` (two :class:`surrogate.sweep.basis.SpatialFactor`),
     ``shape_`` (n_f, P)."""
 
     def __init__(self, centre_modes: int = 48, profile_modes: int = 128,

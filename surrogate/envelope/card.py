@@ -1,5 +1,5 @@
-"""The card of the grey-box envelope model (``surrogate.rom``): inputs, files, split, targets
-and the held-out metrics, with non-finite floats written as null."""
+"""The card of the grey-box envelope model (``surrogate.envelope.fit``): inputs, files, split,
+targets and the held-out metrics, with non-finite floats written as null."""
 
 from __future__ import annotations
 
