@@ -55,15 +55,15 @@ lint: $(STAMP)
 	$(BIN)/lint-imports
 
 bench: $(STAMP)
-	$(BIN)/python bench/bench_solver.py $(if $(BASELINE),--baseline $(BASELINE))
-	$(BIN)/python bench/bench_fem.py
-	$(BIN)/python bench/bench_effects.py
-	$(BIN)/python bench/bench_absorber.py
-	$(BIN)/python bench/bench_backends.py
-	$(BIN)/python bench/bench_generate.py
-	$(BIN)/python bench/bench_mesh_plan.py
-	$(BIN)/python bench/bench_surrogate.py
-	$(BIN)/python bench/bench_plan.py
+	$(BIN)/python bench/fem/solver.py $(if $(BASELINE),--baseline $(BASELINE))
+	$(BIN)/python bench/fem/accuracy.py
+	$(BIN)/python bench/fem/effects.py
+	$(BIN)/python bench/fem/absorber.py
+	$(BIN)/python bench/fem/backends.py
+	$(BIN)/python bench/datasets/generate.py
+	$(BIN)/python bench/datasets/mesh_plan.py
+	$(BIN)/python bench/surrogate/latency.py
+	$(BIN)/python bench/planner/plan.py
 
 # What accuracy costs in time: writes docs/accuracy-vs-time.md and .png (about 10 minutes).
 bench-accuracy: $(STAMP)

@@ -65,7 +65,7 @@ Z95 = 1.959964
 KEPT_SAMPLES = 400  # posterior draws stored in the calibration document
 #: the first versions' correlation of the surrogate's errors (the Gaussian error model, and the
 #: t's lengths when none is given): exponential along each profile output [mm] and across
-#: frequencies [Hz], measured with a Gaussian by bench/bench_calibration.py --residuals on FE
+#: frequencies [Hz], measured with a Gaussian by bench/calibration/calibrate.py --residuals on FE
 #: solves apart from the study's (19.2 mm for nn-default's magnitude profile, 22.1 mm for
 #: nn-normal's, 4.5 mm for nn-normal's normal component; 60 Hz)
 ERROR_LENGTH_MM = {"profile_um": 20.0, "profile_normal_um": 4.5}
@@ -79,7 +79,7 @@ SCALE_HZ = tuple(float(f) for f in range(100, 251, 10))
 #: :data:`SCALE_HZ` (the factor on its predictive log-std), correlation along the profile Matern
 #: 3/2 with ``length_mm``, across frequencies exp(-df^2 / (2 frequency_hz^2)), one mixing
 #: variable shared by the frequencies of a cluster (neighbours at most ``shared_within_hz``
-#: apart), independent between clusters. Measured (``python bench/bench_calibration.py
+#: apart), independent between clusters. Measured (``python bench/calibration/calibrate.py
 #: --sweep-error``): the profile length by maximum likelihood on the held-out rows of the
 #: model's own split (1 mm grid); nu and the scales on the sweep dataset (its first 1600 FE
 #: designs x the 16 frequencies of a 10 Hz grid, which no model trained on), frequency by

@@ -1,7 +1,7 @@
 """Synthetic subjects: measurements made from known amplitudes (an FE solve, or the surrogate
 itself) with a sensor layout and measurement noise, to prove a calibration.
 
-A *subject* is a mapping (the records of bench/data/calibration-subjects.json)::
+A *subject* is a mapping (the records of bench/calibration/data/calibration-subjects.json)::
 
     {"id": 3, "truth": {"skin_E_kPa": 61.2, ...}, "design": {"orientation": "forward", ...},
      "frequencies_hz": [120.0, 180.0], "edge_radius_mm": 3.5,

@@ -28,7 +28,7 @@ from .mesh import geometric_extension
 #: Nominal PML reflection for the reference (shear) wave at normal incidence. Set far below the
 #: usual 1e-3 because faster components (P-type, c_P = 4 c_S at nu = 0.47) see ln(1/R) divided by
 #: their speed ratio: 1e-9 leaves about 1e-3 for a wave three times faster. Measured on the
-#: forearm (bench/bench_absorber.py): moving the boundary 50 -> 80 mm changes the surface
+#: forearm (bench/fem/absorber.py): moving the boundary 50 -> 80 mm changes the surface
 #: amplitude within 20 mm by 3.3 % at 1e-3 and 0.08 % at 1e-9, with the same mesh.
 PML_REFLECTION = 1e-9
 #: Polynomial order of the PML profile.
@@ -40,7 +40,7 @@ STATIC_EXTENSION_FACTOR = 100.0
 #: Elements per wavelength of the slowest shear wave, times the element order, in the layers.
 ELEMENTS_PER_WAVELENGTH = 10.0
 #: Graded damping layer (time domain): thickness in reference wavelengths and peak rate / omega.
-#: Measured on the triple-ring pogo unit at 120 Hz against the PML (bench/bench_absorber.py):
+#: Measured on the triple-ring pogo unit at 120 Hz against the PML (bench/fem/absorber.py):
 #: 1 wavelength reflects 7-19 %, 2 wavelengths at 1.0 omega 1 %, 3 wavelengths at 1.5 omega
 #: 0.2 %, the PML's own level.
 DAMPING_LAYER_WAVELENGTHS = 3.0

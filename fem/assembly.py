@@ -153,7 +153,7 @@ class ScatterMap:
     e.g. the pogo pin springs'), (nnz, ne * nd * nd) each, with the constraint coefficient
     products (+-1) of the kept entries, so assembly is one sparse product per block: no COO
     sort and no duplicate summing per solve (default forearm: 9-12 ms against 35-39 ms for
-    COO -> CSR; bench/bench_solver.py). Duplicates are summed in element order within a block,
+    COO -> CSR; bench/fem/solver.py). Duplicates are summed in element order within a block,
     then the blocks are added. The pattern is the union of the blocks' structural patterns and
     keeps explicit zeros, so it depends on the topology only, never on the values (a sum of
     separately assembled matrices would drop entries that happen to be zero, and the sparse

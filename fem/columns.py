@@ -15,7 +15,7 @@ density (only P). P, Q and R of a column follow from the existing element routin
 formulation lives in one place. Each element is then one row of a (n, 9) x (9, nd^2) product.
 
 Measured on the default forearm (1,378 Q9 elements in 53 columns, mode 1, PML in r):
-see bench/bench_solver.py, stage "element matrices". Results agree with the element-by-element
+see bench/fem/solver.py, stage "element matrices". Results agree with the element-by-element
 path to rounding (tests/fem/test_columns.py checks 1e-11 relative).
 """
 

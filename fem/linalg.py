@@ -5,7 +5,7 @@ hysteretic damping or a PML, real symmetric positive definite for a static solve
 effective matrix of a transient. Every backend here factors once and re-solves cheaply.
 
 Backends and why (medians on the real matrices, one thread, a shared 2-core machine; reproduce
-with ``python bench/bench_backends.py``): the default forearm harmonic matrix (mode 1, Q9
+with ``python bench/fem/backends.py``): the default forearm harmonic matrix (mode 1, Q9
 condensed, 12,298 complex unknowns, 0.56 M non-zeros) and the transient example's effective
 matrix (25,324 real unknowns, 1.17 M non-zeros, two right-hand sides every step).
 

@@ -9,7 +9,7 @@ sequential layer loads no OpenMP runtime beside the one torch or OpenBLAS may br
 Why MKL's product: on the transient example's stiffness (25,324 unknowns, 1.17 M non-zeros) times
 two right-hand sides, scipy's CSR product takes 5.9 ms and MKL's (matrix analysed once,
 :class:`SparseProduct`) about 2 ms; a generalised-alpha step makes two such products
-(``python bench/bench_solver.py --only transient``).
+(``python bench/fem/solver.py --only transient``).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ harmonic systems are complex symmetric (A = A^T, not Hermitian). PARDISO factors
 L D L^T with Bunch-Kaufman pivoting inside supernodes (matrix type 6): on the default forearm
 matrix (12,298 complex unknowns, 0.56 M non-zeros, one thread) ordering + symbolic analysis
 45 ms, numeric factorisation 80 ms, solve 12 ms, 1.46 M factor entries, against SuperLU's
-2.43 M entries and 280-360 ms (``python bench/bench_solver.py --solvers``).
+2.43 M entries and 280-360 ms (``python bench/fem/solver.py --solvers``).
 
 Matrix types used: 6 complex symmetric, 2 real symmetric positive definite (static and
 transient systems; Cholesky), -2 real symmetric indefinite (tried when Cholesky meets a
@@ -83,7 +83,7 @@ class _Handle:
                         self.iparm.ctypes.data_as(ctypes.c_void_p))
         self.iparm[0] = 1    # parameters below are set, not defaults
         self.iparm[1] = 0    # minimum degree (AMD): on both matrices (alternating runs,
-        #                      bench/bench_backends.py) 8 % less fill than METIS
+        #                      bench/fem/backends.py) 8 % less fill than METIS
         #                      (1.34 M against 1.46 M entries on the default forearm, 2.29 M
         #                      against 2.48 M on the transient), a cheaper analysis (cold
         #                      factor 155 against 182 ms), equal numeric time, solves 5-10 %

@@ -199,7 +199,7 @@ def solve_mode(domain: Domain, mode: int, load_full: NDArray, omega: float = 0.0
         extra: (name, element dofs (k, m), matrices (k, m, m)) operators beyond the continuum,
             such as pogo pin springs, on dofs that are not element-interior.
         stages: if given, the wall time (s) of each stage is added under its name (the
-            benchmark's stage table, bench/bench_solver.py).
+            benchmark's stage table, bench/fem/solver.py).
     """
     log = log if log is not None else OperatorLog()
     t = time.perf_counter()

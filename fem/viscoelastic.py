@@ -56,7 +56,7 @@ RE_WEIGHT = 0.5
 by the steady centre and edge amplitudes of four designs of ``datasets/transient`` (samples
 43, 53, 124, 213) at 40, 80, 130 and 200 Hz: harmonic solves on the transient's own matrices
 with the fitted modulus against the hysteretic one (the steady state each transient settles
-to), 32 values per fit (``python bench/bench_transient_damping.py --harmonic-only --samples
+to), 32 values per fit (``python bench/fem/transient_damping.py --harmonic-only --samples
 43 53 124 213 --re-weight 0.5 1 --anchored``). Median / max |relative error|: weight 0.5:
 2.9 / 16 %; weight 1: 4.4 / 25 %; the viscous model at the rated speed: 3.9 / 51 %. Held
 exact at the rated speed as well (``anchor_hz``), weight 0.5 gives 2.1 / 22 % (better from

@@ -8,7 +8,7 @@ largest predictive variance, spread out by a minimum distance in feature space s
 does not spend itself on one corner. The new rows join the dataset (``generate(only=...)``);
 retrain the shipped models from it with ``hapticrom train``.
 
-Selection works on any pool: :func:`select_batch` is also what ``bench/bench_refine.py``
+Selection works on any pool: :func:`select_batch` is also what ``bench/surrogate/refine.py``
 uses to compare refinement against plain Sobol order on the shipped dataset.
 """
 

@@ -10,7 +10,7 @@ Modules: :mod:`.data` (sweep datasets as arrays, splits, row caps), :mod:`.repre
 (the output choices: encode a design's band response to targets, decode predictions back to
 magnitudes and profiles), :mod:`.learners` (scikit-learn MLP, shared-kernel GP, per-output GPs,
 LightGBM), :mod:`.study` (scores, the table, the JSON record). Entry point:
-``bench/bench_output_choice.py``.
+``bench/surrogate/output_choice.py``.
 """
 
 from .study import run, table

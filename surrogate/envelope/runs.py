@@ -52,7 +52,8 @@ def complex_envelopes(u: NDArray, phi: NDArray) -> NDArray:
     its Hilbert transform vanishes there: the envelope starts at 0, as the model's does. An
     odd reflection does not: the first slow cycles of a spin-up (a few hertz) in a component
     in sine phase with the rotor (u_theta on the theta = 0 meridian) give a spurious envelope
-    of 10-15 % of the steady level at t = 0 (measured: ``bench/transient_rise_check.py``)."""
+    of 10-15 % of the steady level at t = 0 (measured:
+    ``bench/surrogate/transient_rise_check.py``)."""
     from scipy.signal import hilbert
 
     u = np.asarray(u, dtype=float)

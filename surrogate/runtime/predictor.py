@@ -80,7 +80,7 @@ CALIBRATION_KEY = "interval_calibration"
 #: Rows per graph call of a large batch: encoding, graph and decoding of a chunk stay in the
 #: cache (measured on nn-default at 10,000 rows, one thread: 17 % less graph time than one
 #: call). 512 rather than 1,024 for the sweep models' decode, whose per-row gathered tables
-#: then stay in the cache: ``bench/bench_predict.py --models nn-default SWEEP_MODEL gp-default
+#: then stay in the cache: ``bench/runtime/predict.py --models nn-default SWEEP_MODEL gp-default
 #: --chunk-rows 256,512,1024 --rounds 5``, 10,000 designs: nn-default 48 / 43 / 40 ms, a sweep
 #: model (150 modes) 423 / 419 / 461 ms, gp-default 964 / 926 / 961 ms
 CHUNK_ROWS = 512

@@ -19,7 +19,7 @@ frequency -> ln magnitudes, exported as the one graph contract of
 
 Per row the decode gathers sum_g 2 k_g S_g numbers of each block (not the band's k x P * 6
 modes at two grid points, with the zeros off the blocks) and does 2 M (sum_g 2 k_g S_g + S L_j)
-FLOPs; ``bench/bench_sweep_predict.py`` counts and times them. The
+FLOPs; ``bench/surrogate/sweep_predict.py`` counts and times them. The
 members' target scaling is folded into their last layer. Psi carries the per-location
 weights of :class:`surrogate.sweep.targets.BandTargets`, so the graph needs nothing outside
 it. :func:`reference_log_outputs` is the graph-free numpy version (through the same factored

@@ -3,7 +3,7 @@
 A sweep dataset (:mod:`surrogate.data.band`) holds one row per design with its complex
 response over a band. Near an antiresonance the magnitude at one frequency changes sharply
 with the design while the complex components and the resonance frequencies move smoothly
-(issue 20; ``bench/bench_output_choice.py`` measured it). A sweep model therefore learns, per
+(issue 20; ``bench/surrogate/output_choice.py`` measured it). A sweep model therefore learns, per
 design, a few numbers from which the whole complex band is rebuilt linearly:
 
 * ``ln s``: the log of the band's RMS centre amplitude [um] (the level of the design);

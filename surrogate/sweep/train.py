@@ -76,7 +76,7 @@ _SWEEP_OPTIONS = {"loss": "magnitude", "centre_modes": 48, "refit_epochs": 400,
                   "refit_patience": 40, "refit_learning_rate": 1e-3, "centre_weight": 6.0,
                   "spatial_tol": 1e-3}
 #: The estimator's defaults for sweep data where they differ from the single-frequency NN's
-#: (bench/bench_sweep_nn.py on 1,248 designs, held-out centre / edge p95: 15 / 13 % with
+#: (bench/surrogate/sweep_nn.py on 1,248 designs, held-out centre / edge p95: 15 / 13 % with
 #: 256 x 256 and the default refit, 19 / 17 % with 128 x 128 and 150 refit epochs at 3e-4)
 _ESTIMATOR_DEFAULTS = {"hidden": (256, 256)}
 #: Held-out designs checked for export parity (every band frequency of each)

@@ -8,7 +8,7 @@ import argparse
 import pytest
 
 import hapticrom.cli as cli
-from bench.count_structure import own_field_errors
+from bench.structure.count_structure import own_field_errors
 from fieldspec import FieldError, WorkError
 
 #: ValueError subclasses left in files another change owns right now (the motor-law rework):

@@ -1,11 +1,11 @@
 """Imports visible (issue 22): no import circle inside a package, and an import inside a
 function only where a measured start-up cost or an optional dependency asks for it, each with
-its reason here. Counted by bench/count_structure.py (every import, functions and
+its reason here. Counted by bench/structure/count_structure.py (every import, functions and
 ``TYPE_CHECKING`` included)."""
 
 from __future__ import annotations
 
-from bench.count_structure import circles, function_imports
+from bench.structure.count_structure import circles, function_imports
 
 #: Circles still standing, each with why: none (the last, fem/scene, went when a Scene's
 #: checks became a hook the reader registers, fem.scene.model.SCENE_CHECKS).

@@ -35,7 +35,7 @@ def test_calibrate_writes_a_valid_document_and_figure(calibrated, capsys):
     assert doc["fit"] == FIT.split(",")
     assert len(doc["measurement"]["points"]) == 14
     assert doc["measurement"]["design"]["n_rings"] == 0
-    # the example was made with skin 75 kPa and loss factor 0.22 (bench/calibration_subjects.py)
+    # the example was made with skin 75 kPa and loss factor 0.22 (bench/calibration/subjects.py)
     lo, hi = doc["posterior"]["skin_E_kPa"]["ci95"]
     assert lo < 75.0 < hi
     lo, hi = doc["posterior"]["tissue_loss_factor"]["ci95"]

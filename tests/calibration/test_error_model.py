@@ -1,7 +1,7 @@
 """The surrogate's error model across frequency: the profile and frequency kernels, the
 clusters of frequencies that share one mixing variable, the scale per frequency, the
 likelihood over clusters against the closed-form t per cluster (and its normalisation), and
-the estimator of a scale per frequency (bench/calibration_errors.py) on synthetic errors."""
+the estimator of a scale per frequency (bench/calibration/error_model.py) on synthetic errors."""
 
 from __future__ import annotations
 
@@ -24,8 +24,8 @@ from calibration.measurement import measurement_from_rows
 from calibration.synthetic import REFERENCE_DESIGNS
 from surrogate.runtime import load_predictor
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-from calibration_errors import fit_t_per_frequency
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench" / "calibration"))
+from error_model import fit_t_per_frequency
 
 DESIGN = REFERENCE_DESIGNS["bare motor"]
 

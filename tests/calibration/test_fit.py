@@ -1,5 +1,5 @@
 """The Bayesian fit: it recovers known tissue from measurements made by the surrogate itself
-and by the FE solver (cached subjects of bench/calibration_subjects.py), says what the data do
+and by the FE solver (cached subjects of bench/calibration/subjects.py), says what the data do
 not determine, is reproducible, and its document conforms to its schema and reads back."""
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from schema_check import problems
 
 FIT = ["skin_E_kPa", "fat_thickness_mm", "tissue_loss_factor"]
 FAST = {"walkers": 24, "steps": 400, "burn": 150, "n_init": 1024}
-CACHE = Path("bench/data/calibration-subjects.json")
+CACHE = Path("bench/calibration/data/calibration-subjects.json")
 
 
 @pytest.fixture(scope="module")

@@ -32,7 +32,7 @@ DESIGN = REFERENCE_DESIGNS["bare motor"]
 TISSUE = {"skin_E_kPa": 60.0, "fat_thickness_mm": 10.0, "tissue_loss_factor": 0.25}
 FIT3 = "skin_E_kPa,fat_thickness_mm,tissue_loss_factor"
 QUICK = ["--walkers", "16", "--steps", "300"]
-SUBJECTS = Path("bench/data/calibration-subjects.json")
+SUBJECTS = Path("bench/calibration/data/calibration-subjects.json")
 
 
 @pytest.fixture(scope="module")

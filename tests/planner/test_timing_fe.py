@@ -2,7 +2,7 @@
 transients of up to 0.62 s per design, 0.5-1.5 min each on the loaded 2-core machine;
 `make test-slow`).
 
-bench/bench_transient_rom.py runs the same comparison and prints it; docs/transient-model.md
+bench/planner/transient_rom.py runs the same comparison and prints it; docs/transient-model.md
 quotes its numbers. Criterion (issue 23): within 1 ms or 5 %. Overdrive and brake come from the
 one motor law in both and must agree; the envelope times that the model misses by more than the
 criterion at the last measurement are strict expected failures, so that a model that starts
@@ -28,8 +28,8 @@ MEASURED_OUTSIDE = {("bare", "rise_ms"), ("bare", "decay_ms"), ("bare", "min_isi
 
 @functools.cache
 def _bench():
-    spec = importlib.util.spec_from_file_location("bench_transient_rom",
-                                                  ROOT / "bench" / "bench_transient_rom.py")
+    spec = importlib.util.spec_from_file_location("transient_rom",
+                                                  ROOT / "bench" / "planner" / "transient_rom.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

@@ -1,4 +1,4 @@
-"""The output-choice study (studies.output_choice, bench/bench_output_choice.py): each output
+"""The output-choice study (studies.output_choice, bench/surrogate/output_choice.py): each output
 choice decodes its own targets back to the band response (exactly when every POD mode is
 kept), the per-output GP learns each target with its own kernel, and a run scores every
 (learner, choice) with finite errors, zero for a perfect prediction."""

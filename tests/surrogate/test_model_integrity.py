@@ -261,7 +261,7 @@ def test_loading_the_shipped_models_still_works():
 @pytest.mark.parametrize("edit", ["motor_ranges", "feature_columns", "weights", "clip",
                                   "motor"])
 def test_a_resealed_rom_with_a_malformed_spec_is_refused_at_load(tmp_path, edit):
-    """Found by bench/bench_mutations_models.py: a renamed motor range loaded, then simulate
+    """Found by bench/runtime/model_mutations.py: a renamed motor range loaded, then simulate
     failed with KeyError 'tau_spindown_ms'. Everything the model indexes is checked at load."""
     d = copy_model("rom", tmp_path / "m")
     coef = json.loads((d / "coefficients.json").read_text())

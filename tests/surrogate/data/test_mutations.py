@@ -1,7 +1,7 @@
 """Datasets checked to the row: every alteration of a part or the manifest is refused by every
 reader, naming the altered file, and nothing is written (issue 21 item 3).
 
-The mutation catalogue is the one of ``bench/bench_dataset_mutations.py``; hypothesis draws
+The mutation catalogue is the one of ``bench/datasets/mutations.py``; hypothesis draws
 the mutation, the part, the row, the column and the damaged bytes."""
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from surrogate.data.inspect import dataset_info, merge_datasets, validate_datase
 from surrogate.data.store import DatasetWarning, Store
 from surrogate.train import load_datasets
 
-_BENCH = Path(__file__).resolve().parents[3] / "bench" / "bench_dataset_mutations.py"
-_spec = importlib.util.spec_from_file_location("bench_dataset_mutations", _BENCH)
+_BENCH = Path(__file__).resolve().parents[3] / "bench" / "datasets" / "mutations.py"
+_spec = importlib.util.spec_from_file_location("mutations", _BENCH)
 mut = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(mut)
 

@@ -1,0 +1,401 @@
+"""The surrogate's error model of a calibration measured (bench/calibration/calibrate.py
+--surrogate-error and --error-check): its residuals on the held-out rows of its training data
+and on FE subjects, the maximum-likelihood Student-t of calibration.likelihood fitted to them,
+and a check of the study's errors at the true inputs against the model."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from calibration import surrogate_std_factor
+from calibration.fit import ERROR_LENGTH_MM, point_scales
+from calibration.forward import ForwardModel
+from calibration.synthetic import synthetic_measurement
+
+ROOT = Path(__file__).resolve().parents[2]
+RESIDUAL_CACHE = ROOT / "bench" / "calibration" / "data" / "calibration-residual-subjects.json"
+FIT = ("skin_E_kPa", "fat_thickness_mm", "tissue_loss_factor")
+NOISES = (0.05, 0.10)
+
+
+def held_out_residuals(predictor) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The surrogate's error on the rows of its training data it never trained on (the
+    card's held-out split, where its metrics come from): per output read by a calibration,
+    (ln(FE / surrogate), its predictive log-std), each (rows, points)."""
+    from surrogate.data.columns import PROFILE_OUTPUTS
+    from surrogate.train import load_datasets, split
+
+    card = predictor.card
+    predictor = predictor.uncalibrated()  # the raw spread, which the likelihood widens
+    extra = [o for o in card["training"].get("profile_outputs", {}) if o != "profile_um"]
+    data = load_datasets([ROOT / d["path"] for d in card["training_data"]], outputs=extra)
+    _, te = split(len(data.codes), card["training"]["test_fraction"], card["training"]["seed"])
+    out = predictor.predict(data.codes[te])
+    truth = {"center_amplitude_um": data.center_um[te][:, None],
+             "profile_um": data.profile_um[te],
+             **{o: data.extra_um[o][te] for o in extra if o in PROFILE_OUTPUTS}}
+    res = {}
+    for name, y in truth.items():
+        mu = out[name].reshape(len(te), -1)
+        res[name] = (np.log(y / mu), out[f"{name}_log_std"].reshape(len(te), -1))
+    return res
+
+
+def subject_residuals(subjects: list[dict], predictor, component: str
+                      ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """As :func:`held_out_residuals` on FE subjects (one row per subject and frequency): the
+    unit's face (magnitude) and the profile of the ``component``."""
+    prof = "profile_um" if component == "magnitude" else "profile_normal_um"
+    predictor = predictor.uncalibrated()  # the raw spread, which the likelihood widens
+    rows: dict[str, list] = {"center_amplitude_um": [], prof: []}
+    for s in subjects:
+        for i, f in enumerate(s["frequencies_hz"]):
+            X = {k: np.array([v]) for k, v in {**s["design"], **s["truth"]}.items()}
+            X["frequency_hz"] = np.array([f])
+            o = predictor.predict(X)
+            fe = {"center_amplitude_um": [s["centre_um"]["magnitude"][i]],
+                  prof: s["profile_um"][component][i]}
+            for name, y in fe.items():
+                rows[name].append((np.log(np.asarray(y) / o[name][0]),
+                                   np.atleast_1d(o[f"{name}_log_std"][0])))
+    return {n: (np.array([r[0] for r in v]), np.array([r[1] for r in v]))
+            for n, v in rows.items()}
+
+
+def fit_t(r: np.ndarray, sd: np.ndarray, corr: np.ndarray) -> dict[str, float]:
+    """Maximum likelihood of the multivariate Student-t of calibration.likelihood for the
+    residual vectors ``r`` (rows) with log-std ``sd``: nu and the scale c of
+    S = c^2 diag(sd) corr diag(sd); the Gaussian's scale and both log-likelihoods (of r / sd)."""
+    from scipy.optimize import minimize
+
+    from calibration.likelihood import mvt_logpdf
+
+    x = r / sd  # in units of the log-std: S = c^2 corr (the Jacobian sum ln sd is a constant)
+
+    def nll(p: np.ndarray, nu: float | None = None) -> float:
+        v = np.exp(p[1]) if nu is None else nu
+        return -float(np.sum(mvt_logpdf(x, np.exp(2 * p[0]) * corr, v)))
+
+    t = minimize(nll, np.array([0.0, 1.0]), method="Nelder-Mead",
+                 options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 2000})
+    g = minimize(lambda p: nll(p, np.inf), np.array([0.0]), method="Nelder-Mead")
+    return {"nu": float(np.exp(t.x[1])), "scale": float(np.exp(t.x[0])), "loglik": -t.fun,
+            "gauss_scale": float(np.exp(g.x[0])), "gauss_loglik": -g.fun}
+
+
+def fit_surrogate_error(predictor, component: str) -> list[str]:
+    """Fit the multivariate Student-t of calibration.likelihood to the held-out residual
+    vectors of each output a ``component`` sensor reads (one vector per held-out row: the
+    profile's points, correlated as the calibration assumes, ERROR_LENGTH_MM); beside it the
+    same fit on the FE subjects of --residuals (one vector per subject and frequency)."""
+    outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
+               ("profile_normal_um",))
+    grid = np.asarray(predictor.profile_distance_mm, dtype=float)
+    other = subject_residuals(json.loads(RESIDUAL_CACHE.read_text())["subjects"], predictor,
+                              component)
+    lines = []
+    for name, (r, sd) in held_out_residuals(predictor).items():
+        if name not in outputs:
+            continue
+        m = r.shape[1]
+        C = (np.ones((1, 1)) if m == 1 else
+             np.exp(-np.abs(grid[:, None] - grid[None, :]) / ERROR_LENGTH_MM.get(name, 20.0)))
+        f, o = fit_t(r, sd, C), fit_t(*other[name], C)
+        z = np.abs(r / sd).ravel()
+        lines += [f"  {name}: {r.shape[0]} held-out rows x {m} points: Student-t nu "
+                  f"{f['nu']:.3g}, scale {f['scale']:.3g} (log-lik {f['loglik']:.1f}); Gaussian "
+                  f"scale {f['gauss_scale']:.3g} (log-lik {f['gauss_loglik']:.1f}); |z| within "
+                  f"1.96: {np.mean(z <= 1.96):.1%}, 99th percentile {np.percentile(z, 99):.1f}",
+                  f"    on the {len(other[name][0])} FE solves of --residuals: nu {o['nu']:.3g}, "
+                  f"scale {o['scale']:.3g} (log-lik {o['loglik']:.1f}); Gaussian scale "
+                  f"{o['gauss_scale']:.3g} (log-lik {o['gauss_loglik']:.1f})"]
+    return lines
+
+
+#: the previous version's Student-t (one mixing variable per output across all its
+#: frequencies, one scale, exponential kernels of ERROR_LENGTH_MM and ERROR_FREQUENCY_HZ),
+#: kept here to check it beside the current one
+PREVIOUS_T = {"center_amplitude_um": {"nu": 2.18, "scale": 0.98},
+              "profile_um": {"nu": 1.86, "scale": 0.541},
+              "profile_normal_um": {"nu": 1.32, "scale": 0.706}}
+
+
+def _pit_blocks(fwd: ForwardModel, sd: np.ndarray, e: np.ndarray, version: str, k: float
+                ) -> list[tuple[float, int]]:
+    """(PIT, number of frequencies) of the error ``e`` per block of the error model
+    ``version`` ("t": calibration.fit's; "t, previous": PREVIOUS_T; "gaussian")."""
+    from scipy import stats
+
+    from calibration.fit import error_settings
+
+    t_model = version == "t"
+    errors = {g.output: error_settings(g.output, t_model, k) for g in fwd.groups}
+    if version == "t, previous":
+        for o, e_ in errors.items():
+            if o in PREVIOUS_T:
+                e_.update(PREVIOUS_T[o])
+    shared = {o: v["shared_within_hz"] for o, v in errors.items()
+              if v["shared_within_hz"] is not None}
+    corr = fwd.error_correlation(
+        {o: errors[o]["length_mm"] for o in fwd.profile_outputs} or 1.0,
+        {o: v["frequency_hz"] for o, v in errors.items()}, shared_within_hz=shared,
+        profile_kernel={o: v["profile_kernel"] for o, v in errors.items()},
+        frequency_kernel={o: v["frequency_kernel"] for o, v in errors.items()})
+    x = e / (point_scales(fwd, errors, k) * sd)
+    f = np.array([p.frequency_hz for p in fwd.measurement.points])
+    out = []
+    for ix, g in fwd.error_blocks(shared):
+        delta = float(x[ix] @ np.linalg.solve(corr[np.ix_(ix, ix)], x[ix]))
+        nu = errors[g.output]["nu"]
+        pit = (stats.chi2.cdf(delta, ix.size) if nu is None else
+               stats.f.cdf(delta / ix.size, ix.size, nu))
+        out.append((float(pit), len(set(f[ix]))))
+    return out
+
+
+def error_check(subjects: list[dict], predictor, component: str) -> list[str]:
+    """Whether the study's surrogate errors at the true inputs look like draws of the error
+    model: per measurement of the study (both noise levels' layouts) and block of points that
+    share a mixing variable (an output read, and for the current t a cluster of its
+    frequencies), the noise-free error e = ln(FE) - ln(surrogate) at the measured points, its
+    Mahalanobis distance delta under S = diag(c s) C diag(c s), and its probability integral
+    transform, F(delta / m; m, nu) for a Student-t, chi^2(delta; m) for the Gaussian with the
+    card's k: uniform on [0, 1] if the model describes the errors. Per version of the error
+    model, over all blocks and by the number of frequencies of the measurement."""
+    k = surrogate_std_factor(predictor.card)
+    pit: dict[str, list[float]] = {}
+    for s in subjects:
+        grid = list(s["profile_distance_mm"])
+        for noise in NOISES:
+            rng = np.random.default_rng(1000 * int(s["id"]) + round(100 * noise))
+            m = synthetic_measurement(s, rel_noise=noise, n_points=int(rng.integers(5, 11)),
+                                      rng=rng, component=component,
+                                      sensor="ldv" if component == "normal" else None)
+            fwd = ForwardModel(predictor, m, FIT, s["design"])
+            freqs = list(s["frequencies_hz"])
+            fe = np.array([s["centre_um"][component][freqs.index(p.frequency_hz)]
+                           if p.reference == "centre" else
+                           s["profile_um"][component][freqs.index(p.frequency_hz)][
+                               grid.index(round(p.distance_m * 1e3, 6))] for p in m.points])
+            mean, sd = fwd.predict(np.array([[s["truth"][n] for n in FIT]]))
+            e = np.log(fe * 1e-6) - mean[0]
+            for version in ("t", "t, previous", "gaussian"):
+                for value, _ in _pit_blocks(fwd, sd[0], e, version, k):
+                    for key in (version, f"{version}, {len(freqs)} frequenc"
+                                + ("y" if len(freqs) == 1 else "ies")):
+                        pit.setdefault(key, []).append(value)
+    lines = []
+    for name in sorted(pit, key=lambda n: (n.split(",")[0] != "t", n)):
+        a = np.array(pit[name])
+        q = np.histogram(a, bins=[0, 0.25, 0.5, 0.75, 1.0])[0] / max(a.size, 1)
+        lines.append(f"  {name}: {a.size} blocks; PIT quartile fractions "
+                     + " ".join(f"{x:.2f}" for x in q)
+                     + f"; below 0.025 {np.mean(a < 0.025):.2f}, above 0.975 "
+                     f"{np.mean(a > 0.975):.2f} (uniform: 0.25 each; 0.025, 0.025)")
+    return lines
+
+
+#: the sweep dataset the cross-frequency structure is measured on (FE solves of the same space
+#: and solver as datasets/default, each design at every 2 Hz in 100-250 Hz; not trained on:
+#: ``hapticrom generate --space datasets/spaces/default-sweep.toml``); --sweep DIR for another
+#: the sweep designs the error model was measured on, by ``sample_index`` (a fixed set: the
+#: first 1,600 a generation of datasets/spaces/default-sweep.toml wrote; any dataset of that
+#: space holding them reproduces the fit)
+SWEEP_DESIGNS_FILE = Path(__file__).resolve().parent / "data" / "sweep-error-designs.txt"
+SWEEP_STEP_HZ = 10.0  # its frequencies used: the study's 10 Hz grid
+
+
+def sweep_design_indices(path: Path = SWEEP_DESIGNS_FILE) -> np.ndarray:
+    """The ``sample_index`` of the designs listed in ``path`` (comment lines start with #)."""
+    lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    return np.array([int(ln) for ln in lines], dtype=np.int64)
+
+
+def sweep_residuals(predictor, path: Path
+                    ) -> tuple[np.ndarray, np.ndarray, dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """The surrogate's error on the sweep dataset at the frequencies of a 10 Hz grid and the
+    profile points it shares with the model (every 2 mm, 0-20 mm from the edge): (frequencies
+    [Hz], distances [mm], per output read {name: (ln(FE / surrogate), raw predictive log-std),
+    each (designs, frequencies[, points])}); magnitude |U| and normal component |U_z|."""
+    from surrogate.data.store import Store
+
+    df = Store.open(path).read()
+    want = sweep_design_indices()
+    df = df[(df["status"] == "ok") & df["sample_index"].isin(want)]
+    df = df.sort_values("sample_index", kind="stable").reset_index(drop=True)
+    if len(df) < want.size:
+        raise ValueError(f"--sweep {path}: holds {len(df)} of the {want.size} designs of "
+                         f"{SWEEP_DESIGNS_FILE.name}; extend it with `hapticrom generate --space "
+                         "datasets/spaces/default-sweep.toml --n 8192 --out DIR`")
+    n = len(df)
+    freq = np.asarray(df["sweep_frequency_hz"].iloc[0], dtype=float)
+    keep = np.flatnonzero(np.isclose(np.mod(freq, SWEEP_STEP_HZ), 0.0))
+    dist = np.asarray(df["profile_distance_mm"].iloc[0], dtype=float)
+    grid = np.asarray(predictor.profile_distance_mm, dtype=float)
+    pk = np.flatnonzero(dist <= grid[-1])
+    gi = np.array([int(np.argmin(np.abs(grid - d))) for d in dist[pk]])
+    if not np.allclose(grid[gi], dist[pk]):
+        raise ValueError("the sweep's profile points are not on the model's grid")
+
+    def comp(where: str, c: str) -> np.ndarray:
+        re = np.stack([np.asarray(v, float) for v in df[f"sweep_{where}_{c}_re_um"]])
+        im = np.stack([np.asarray(v, float) for v in df[f"sweep_{where}_{c}_im_um"]])
+        return (re + 1j * im).reshape(n, freq.size, -1)[:, keep]
+
+    prof = {c: comp("profile", c)[:, :, pk] for c in ("ur", "uz", "ut")}
+    cen = {c: comp("center", c)[:, :, 0] for c in ("ur", "uz", "ut")}
+    fe = {"center_amplitude_um": np.sqrt(sum(np.abs(v) ** 2 for v in cen.values())),
+          "profile_um": np.sqrt(sum(np.abs(v) ** 2 for v in prof.values())),
+          "profile_normal_um": np.abs(prof["uz"])}
+    f = freq[keep]
+    X = {k: np.repeat(df[k].to_numpy(), f.size) for k in predictor.input_names
+         if k != "frequency_hz"}
+    X["frequency_hz"] = np.tile(f, n)
+    out = predictor.uncalibrated().predict(X)
+    res = {}
+    for name, y in fe.items():
+        if name not in out:
+            continue
+        mu = out[name].reshape(n, f.size, -1)
+        sd = out[f"{name}_log_std"].reshape(n, f.size, -1)
+        if name != "center_amplitude_um":
+            mu, sd = mu[:, :, gi], sd[:, :, gi]
+        else:
+            mu, sd = mu[:, :, 0], sd[:, :, 0]
+        res[name] = (np.log(y / mu), sd)
+    return f, dist[pk], res
+
+
+def fit_matern_profile(r: np.ndarray, sd: np.ndarray, grid_mm: np.ndarray,
+                       previous_length_mm: float) -> dict[str, dict[str, Any]]:
+    """Maximum likelihood of the multivariate t with the profile correlation
+    calibration.likelihood.profile_kernel on residual vectors ``r`` (rows) with log-std
+    ``sd``: nu, the scale c and the length L [mm] for Matern 3/2 and for the exponential, and
+    nu and c for the previous version's exponential of ``previous_length_mm``; each with its
+    log-likelihood and the scale refitted on every 2nd and 4th point (its length kept): a
+    kernel of the right shape gives the same scale whatever the spacing of the points."""
+    from scipy.optimize import minimize
+
+    from calibration.likelihood import mvt_logpdf, profile_kernel
+
+    x = r / sd
+    lag = np.abs(grid_mm[:, None] - grid_mm[None, :])
+
+    def fit(xs: np.ndarray, lags: np.ndarray, kind: str, length: float | None
+            ) -> tuple[np.ndarray, float]:
+        def nll(p: np.ndarray) -> float:
+            ln = float(np.exp(p[2])) if length is None else length
+            return -float(np.sum(mvt_logpdf(xs, np.exp(2 * p[0]) * profile_kernel(
+                lags, ln, kind), float(np.exp(p[1])))))
+        p0 = np.array([0.0, 0.7] + ([np.log(10.0)] if length is None else []))
+        t = minimize(nll, p0, method="Nelder-Mead",
+                     options={"xatol": 1e-4, "fatol": 1e-3, "maxiter": 3000})
+        return np.exp(t.x), -float(t.fun)
+
+    fits: dict[str, dict[str, Any]] = {}
+    for label, kind, length in (("matern32", "matern32", None),
+                                ("exponential", "exponential", None),
+                                (f"exponential {previous_length_mm:g} mm (previous)",
+                                 "exponential", previous_length_mm)):
+        p, ll = fit(x, lag, kind, length)
+        ln = float(p[2]) if length is None else length
+        fits[label] = {"scale": float(p[0]), "nu": float(p[1]), "length_mm": ln, "loglik": ll,
+                       "scale_spaced": [float(fit(x[:, ::k], lag[::k, ::k], kind, ln)[0][0])
+                                        for k in (2, 4)]}
+    return fits
+
+
+def fit_t_per_frequency(x: np.ndarray, corr: np.ndarray) -> tuple[float, np.ndarray]:
+    """Maximum likelihood of the multivariate t of calibration.likelihood with one scale per
+    frequency: ``x`` (designs, frequencies, points) the errors in units of the log-std, each
+    (design, frequency) vector one draw with scale matrix c_f^2 ``corr`` and one nu shared by
+    every frequency. Returns nu and c (frequencies,)."""
+    from scipy.optimize import minimize
+
+    from calibration.likelihood import mvt_logpdf
+
+    nf = x.shape[1]
+
+    def nll(p: np.ndarray) -> float:
+        return -sum(float(np.sum(mvt_logpdf(x[:, i], np.exp(2 * p[1 + i]) * corr,
+                                            float(np.exp(p[0]))))) for i in range(nf))
+
+    t = minimize(nll, np.r_[0.7, np.zeros(nf)], method="Powell",
+                 options={"xtol": 1e-3, "ftol": 1e-5})
+    return float(np.exp(t.x[0])), np.exp(t.x[1:])
+
+
+def fit_sweep_error(predictor, component: str, path: Path) -> list[str]:
+    """The surrogate's error structure across frequency, per output a ``component`` sensor
+    reads (calibration.fit.SURROGATE_ERROR_T): the correlation length along the profile
+    (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid); on the sweep
+    dataset, nu and a scale per frequency (the profile's length fixed), then for each frequency
+    difference df of one design: the correlation rho of its errors under one shared mixing
+    variable lam, and that model's log-likelihood per pair of frequencies against independent
+    lams (no correlation): lam is shared where it wins. The frequency length is the Gaussian
+    kernel exp(-df^2 / (2 L_f^2)) fitted to rho at those df."""
+    from scipy.optimize import minimize_scalar
+
+    from calibration.likelihood import mvt_logpdf, profile_kernel
+
+    outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
+               ("profile_normal_um",))
+    held = held_out_residuals(predictor.uncalibrated())
+    grid = np.asarray(predictor.profile_distance_mm, dtype=float)
+    f, dist, sweep = sweep_residuals(predictor, path)
+    lines = [f"  sweep dataset {path}: {next(iter(sweep.values()))[0].shape[0]} designs x "
+             f"{f.size} frequencies ({f[0]:g}-{f[-1]:g} Hz every {SWEEP_STEP_HZ:g}), profile "
+             f"points {dist[0]:g}-{dist[-1]:g} mm every {dist[1] - dist[0]:g} mm"]
+    for name in outputs:
+        r, sd = sweep[name]
+        x = r / sd
+        if x.ndim == 2:
+            x = x[:, :, None]
+            K, length = np.ones((1, 1)), None
+            lines.append(f"  {name}: held-out rows: the face (one point)")
+        else:
+            hr = held[name]
+            fits = fit_matern_profile(*hr, grid, ERROR_LENGTH_MM[name])
+            length = round(fits["matern32"]["length_mm"], 1)
+            K = profile_kernel(np.abs(dist[:, None] - dist[None, :]), length, "matern32")
+            lines.append(f"  {name}: {hr[0].shape[0]} held-out rows x {grid.size} points: "
+                         + "; ".join(f"{k} nu {v['nu']:.3g} scale {v['scale']:.3g} length "
+                                     f"{v['length_mm']:.3g} mm log-lik {v['loglik']:.1f} "
+                                     "(scale on every 2nd / 4th point: "
+                                     + " / ".join(f"{c:.3g}" for c in v["scale_spaced"]) + ")"
+                                     for k, v in fits.items()))
+        m = x.shape[2]
+        nu, c = fit_t_per_frequency(x, K)
+        lines.append(f"    sweep, one frequency at a time: nu {nu:.3g}; scale per frequency "
+                     + " ".join(f"{a:g}:{b:.3g}" for a, b in zip(f, c, strict=True)))
+        xs = x / c[None, :, None]
+        nf = x.shape[1]
+        rows = []
+        for df_hz in SWEEP_STEP_HZ * np.arange(1, 9):
+            pairs = [(i, j) for i in range(nf) for j in range(nf)
+                     if np.isclose(f[j] - f[i], df_hz)]
+            X = np.concatenate([np.concatenate([xs[:, i], xs[:, j]], axis=1)
+                                for i, j in pairs])
+            ind = float(np.sum(mvt_logpdf(X[:, :m], K, nu)) + np.sum(mvt_logpdf(X[:, m:], K, nu)))
+
+            def shared(rho: float, X: np.ndarray = X, K: np.ndarray = K, nu: float = nu
+                       ) -> float:
+                return -float(np.sum(mvt_logpdf(X, np.kron(np.array([[1.0, rho], [rho, 1.0]]),
+                                                           K), nu)))
+            s = minimize_scalar(shared, bounds=(-0.5, 0.99), method="bounded")
+            rows.append((df_hz, float(s.x), (-float(s.fun) - ind) / len(X)))
+        win = [(d, rho) for d, rho, gain in rows if gain > 0 and rho > 0]
+        shared_hz = max((d for d, _ in win), default=0.0)
+        lf = (float(np.sqrt(np.mean([d ** 2 / (-2.0 * np.log(rho)) for d, rho in win])))
+              if win else float("nan"))
+        lines.append("    pairs of frequencies of one design, df: rho under a shared lam, "
+                     "log-likelihood gain per pair over independent lams: "
+                     + "; ".join(f"{d:g} Hz {rho:.2f} {g:+.3f}" for d, rho, g in rows))
+        lines.append(f"    -> lam shared within {shared_hz:g} Hz, frequency length (Gaussian) "
+                     f"{lf:.1f} Hz" + ("" if length is None else
+                                       f", profile length (Matern 3/2) {length:g} mm"))
+    return lines
