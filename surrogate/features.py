@@ -1,4 +1,5 @@
-"""Model inputs from a dataset's parameter space, and the training-side feature encoder.
+"""Model inputs from a dataset's parameter space (merged over datasets), the unit's edge radius of
+each row, and the training-side feature encoder.
 
 The inputs of a surrogate are the free parameters of the space its data was sampled from:
 continuous ones keep their range and scale (log parameters are encoded on a log scale),
@@ -16,9 +17,11 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from surrogate.data.worker import edge_radius_mm
 from surrogate.runtime.encoding import InputSpec, encode, n_features, parse_inputs
 
-__all__ = ["SpaceEncoder", "codes_from_frame", "input_specs", "unit_of", "used_when"]
+__all__ = ["SpaceEncoder", "codes_from_frame", "edge_radii_mm", "input_specs", "merge_specs",
+           "unit_of", "used_when"]
 
 #: Unit suffixes of parameter names (the project puts units in names: ``skin_E_kPa``).
 _UNIT_SUFFIXES = {"_kPa": "kPa", "_Pa": "Pa", "_mm": "mm", "_um": "um", "_hz": "Hz",
@@ -117,3 +120,27 @@ class SpaceEncoder(TransformerMixin, BaseEstimator):
         codes, _ = parse_inputs(X, self.specs_, extrapolate=True) if self.inputs is None \
             else parse_inputs(X, self.specs_)
         return encode(codes, self.specs_)
+
+
+def edge_radii_mm(df: Any) -> np.ndarray:
+    """The unit's outer radius [mm] of every row: the dataset's column when it has one, else
+    derived from the row's resolved scene by the solver's scene model."""
+    stored = (df["edge_radius_mm"].to_numpy(dtype=float, copy=True)
+              if "edge_radius_mm" in df.columns else np.full(len(df), np.nan))
+    missing = np.isnan(stored)
+    stored[missing] = [edge_radius_mm(s) for s in df.loc[missing, "scene_json"]]
+    return stored
+
+
+def merge_specs(a: list[InputSpec], b: list[InputSpec], where: str) -> list[InputSpec]:
+    """The inputs of two datasets of one space: ``a`` with each continuous range widened to
+    cover ``b``'s (``where``: the second dataset, named in the error when the inputs differ)."""
+    if [(s.name, s.type, s.choices, s.scale, s.used_when) for s in a] != \
+            [(s.name, s.type, s.choices, s.scale, s.used_when) for s in b]:
+        raise ValueError(f"{where}: its space's inputs differ from the first dataset's "
+                         f"({[s.name for s in b]} vs {[s.name for s in a]})")
+    return [s if s.type == "categorical" else
+            InputSpec(name=s.name, type=s.type, low=min(s.low, t.low), high=max(s.high, t.high),
+                      scale=s.scale, unit=s.unit, description=s.description,
+                      used_when=s.used_when)
+            for s, t in zip(a, b, strict=True)]

@@ -4,8 +4,9 @@ Every kind is one record in :data:`surrogate.kinds.KINDS`; nothing else in the p
 on a kind's name. A steady-state kind names a scikit-learn-style estimator class (parameters in
 ``__init__``, ``fit(X, T)``, ``predict(X, return_std=True)`` giving the mean and std of the
 targets of :class:`surrogate.pod.ProfileTargets`) and the function that writes it as the one
-ONNX graph contract of :mod:`surrogate.estimators.export`. A kind with a pipeline of its own (the
-transient envelope model) names its ``trainer`` instead.
+ONNX graph contract of :mod:`surrogate.estimators.export`. A kind that also trains on sweep
+datasets carries its part of that pipeline (:class:`SweepKind`, :mod:`surrogate.sweep.train`).
+A kind with a pipeline of its own (the transient envelope model) names its ``trainer`` instead.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SurrogateKind"]
+__all__ = ["SurrogateKind", "SweepKind", "estimator_params"]
 
 
 def _no_extras(estimator: Any) -> dict[str, Any]:
@@ -27,6 +28,42 @@ def _predict_log(estimator: Any, B: np.ndarray, b: np.ndarray) -> Callable[[np.n
                                                                             np.ndarray]:
     """The in-memory model's log outputs: ``estimator.predict(X) @ B + b``."""
     return lambda X: estimator.predict(X) @ B + b
+
+
+def estimator_params(estimator: Any) -> dict[str, Any]:
+    """The estimator's parameters as JSON values (tuples as lists, anything else as text), for
+    the card's ``training.estimator``."""
+    return {k: _plain(v) for k, v in estimator.get_params().items()}
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, tuple):
+        return list(v)
+    return v if isinstance(v, (int, float, str, bool, type(None), list)) else str(v)
+
+
+@dataclass(frozen=True)
+class SweepKind:
+    """A kind's part of the sweep pipeline (:func:`surrogate.sweep.train.train_sweep`): the
+    steps that differ between kinds, the rest is shared.
+
+    Attributes:
+        check_options: ``check_options(options) -> checked``: the ``--options`` with their
+            defaults, each checked (a :class:`fieldspec.FieldError` naming the bad one), before
+            anything is read or written.
+        fit: ``fit(checked, data, designs, seed, n_modes, normal) -> (estimator, targets,
+            training entries of the card)`` on the rows ``designs`` of the sweep data.
+        export: ``export(estimator, targets, normal, frequency_low, frequency_high, band_hz,
+            metadata) -> ONNX bytes`` (the graph decodes the complex band).
+        parity: ``parity(estimator, targets, predictor, data, designs, normal) -> card
+            entries`` (``export_parity_max_abs_dln``, ...): the graph against the estimator on
+            held-out ``designs``; raises above the kind's tolerance.
+    """
+
+    check_options: Callable[[Mapping[str, Any] | None], Any]
+    fit: Callable[..., tuple[Any, Any, dict[str, Any]]]
+    export: Callable[..., bytes]
+    parity: Callable[..., dict[str, Any]]
 
 
 def steady_report(card: Mapping[str, Any]) -> list[str]:
@@ -62,6 +99,11 @@ class SurrogateKind:
             accuracy study's labels.
         in_memory: ``in_memory(estimator, B, b) -> f(X) -> log outputs``, the fastest
             in-memory path (the accuracy study times it beside the ONNX graph).
+        sweep: its part of the sweep pipeline, None when it does not train on sweep datasets.
+        quick_options: estimator options of a smoke-test run (the accuracy study's
+            ``--quick``: fewer epochs, members or trees), not a converged model.
+        row_cap: training rows a learning curve stops at (the exact GP's O(n^3) fit: the
+            shipped gp-default's 500 rows), None: every row.
     """
 
     name: str
@@ -77,3 +119,11 @@ class SurrogateKind:
     report: Callable[[Mapping[str, Any]], list[str]] = field(default=steady_report)
     engine: str = "scikit-learn"
     in_memory: Callable[..., Callable[[np.ndarray], np.ndarray]] = field(default=_predict_log)
+    sweep: SweepKind | None = None
+    quick_options: Mapping[str, Any] = field(default_factory=dict)
+    row_cap: int | None = None
+
+    def fit(self, X: np.ndarray, T: np.ndarray, seed: int, options: Mapping[str, Any]) -> Any:
+        """The fitted estimator of this kind (``options``: its parameters, ``--options``)."""
+        assert self.estimator is not None, f"{self.name} has a pipeline of its own"
+        return self.estimator(random_state=seed, **options).fit(X, T)

@@ -28,10 +28,9 @@ import numpy as np
 from fieldspec import FieldError
 from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.data.store import Store, profile_matrix
-from surrogate.data.worker import edge_radius_mm
-from surrogate.features import codes_from_frame, input_specs
+from surrogate.features import codes_from_frame, edge_radii_mm, input_specs, merge_specs
 from surrogate.intervals import Z95, calibrate, normalised_residual, residuals
-from surrogate.kind import SurrogateKind
+from surrogate.kind import SurrogateKind, estimator_params
 from surrogate.pod import ProfileTargets, output_columns
 from surrogate.registry import (
     check_model_out,
@@ -42,7 +41,7 @@ from surrogate.registry import (
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
 
-__all__ = ["TrainingData", "card_head", "check_outputs", "edge_radius_rule", "evaluate", "fit_kind",
+__all__ = ["TrainingData", "card_head", "check_outputs", "edge_radius_rule", "evaluate",
            "load_datasets", "train"]
 
 #: Interval calibration by default: this share of the training rows, when it is at least
@@ -81,28 +80,6 @@ def check_outputs(outputs: Sequence[str]) -> tuple[str, ...]:
     return tuple(o for o in names if o != "profile_um")
 
 
-def _edge_radius(df: Any) -> np.ndarray:
-    """The unit's outer radius [mm] of every row: the dataset's column when it has one, else
-    derived from the row's resolved scene by the solver's scene model."""
-    stored = (df["edge_radius_mm"].to_numpy(dtype=float, copy=True)
-              if "edge_radius_mm" in df.columns else np.full(len(df), np.nan))
-    missing = np.isnan(stored)
-    stored[missing] = [edge_radius_mm(s) for s in df.loc[missing, "scene_json"]]
-    return stored
-
-
-def _merge_specs(a: list[InputSpec], b: list[InputSpec], where: str) -> list[InputSpec]:
-    if [(s.name, s.type, s.choices, s.scale, s.used_when) for s in a] != \
-            [(s.name, s.type, s.choices, s.scale, s.used_when) for s in b]:
-        raise ValueError(f"{where}: its space's inputs differ from the first dataset's "
-                         f"({[s.name for s in b]} vs {[s.name for s in a]})")
-    return [s if s.type == "categorical" else
-            InputSpec(name=s.name, type=s.type, low=min(s.low, t.low), high=max(s.high, t.high),
-                      scale=s.scale, unit=s.unit, description=s.description,
-                      used_when=s.used_when)
-            for s, t in zip(a, b, strict=True)]
-
-
 def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
                   outputs: Sequence[str] = ()) -> TrainingData:
     """Read the "ok" rows of every dataset (all of the same space inputs and profile grid;
@@ -124,7 +101,7 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
                              "band); these models train on single-frequency rows (sweeps: "
                              "surrogate.sweep.train, which hapticrom train calls for them)")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
-        specs = these if specs is None else _merge_specs(specs, these, str(path))
+        specs = these if specs is None else merge_specs(specs, these, str(path))
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)
         if grid is None:
             grid = g
@@ -151,7 +128,7 @@ def load_datasets(paths: Sequence[str | Path], *, categorical: str = "onehot",
     codes = np.concatenate([codes_from_frame(df, specs) for df in parts])
     center = np.concatenate([df["center_amplitude_um"].to_numpy(float) for df in parts])
     profile = np.concatenate([profile_matrix(df, grid) for df in parts])
-    radius = np.concatenate([_edge_radius(df) for df in parts])
+    radius = np.concatenate([edge_radii_mm(df) for df in parts])
     if np.isnan(profile).any():
         raise ValueError("some rows' profiles do not cover the profile grid")
     extra_um = {name: np.concatenate([profile_matrix(df, grid, PROFILE_OUTPUTS[name][0])
@@ -228,14 +205,6 @@ def evaluate(pred: dict[str, np.ndarray], center_um: np.ndarray,
     return out
 
 
-def fit_kind(kind: SurrogateKind, X: np.ndarray, T: np.ndarray, seed: int,
-             options: dict[str, Any]) -> Any:
-    """The fitted estimator of ``kind`` (``options``: its parameters, ``--options``)."""
-    assert kind.estimator is not None, f"{kind.name} has a pipeline of its own"
-    return kind.estimator(random_state=seed, **options).fit(X, T)
-
-
-
 def card_head(kind: str, dtype: str, specs: Sequence[InputSpec], data: Any,
               extra: Sequence[str]) -> dict[str, Any]:
     """What every steady-state model's card says of its interface, whatever it was trained on:
@@ -300,7 +269,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     T = targets.fit_transform(data.center_um[tr], data.profile_um[tr],
                               [data.extra_um[name][tr] for name in extra])
     B, b = targets.output_map()
-    est = fit_kind(spec, X[tr], T, seed, dict(options or {}))
+    est = spec.fit(X[tr], T, seed, dict(options or {}))
     card: dict[str, Any] = {
         **card_head(kind, spec.dtype, data.specs, data, extra),
         "training": {"rows": int(tr.size), "held_out": int(te.size), "seed": seed,
@@ -311,7 +280,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                                 "pod_modes": int(pod.modes_.shape[0]),
                                 "pod_energy": float(pod.energy_[-1])}
                          for name, pod in targets.pods.items()}} if extra else {}),
-                     "estimator": {k: _plain(v) for k, v in est.get_params().items()}},
+                     "estimator": estimator_params(est)},
         "versions": package_versions()}
     meta = {k: card[k] for k in ("kind", "inputs", "outputs", "profile_distance_mm",
                                  "training_data")}
@@ -372,9 +341,3 @@ def _parity(kind: SurrogateKind, est: Any, predictor: Predictor, X: np.ndarray, 
         raise RuntimeError(f"exported {kind.name} graph differs from the estimator by "
                            f"{worst:.3g} in log amplitude (tolerance {kind.parity_tol})")
     return worst
-
-
-def _plain(v: Any) -> Any:
-    if isinstance(v, tuple):
-        return list(v)
-    return v if isinstance(v, (int, float, str, bool, type(None), list)) else str(v)

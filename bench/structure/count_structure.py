@@ -8,9 +8,11 @@ Counted over the project's packages (tests, bench, examples and embed are left o
 
 ``kind switches``
     comparisons (``==``, ``!=``, ``in``), ``match`` cases and dict keys naming a surrogate kind
-    (``"gp"``, ``"nn"``, ``"rom"``, ``"mlp"``) anywhere, or a device kind (``"sim"``,
-    ``"log"``, ``"serial"``) in ``hardware/`` and ``hapticrom/`` (elsewhere ``"log"`` is a
-    scale), outside the two registries (``surrogate/kinds.py``, ``hardware/backends.py``).
+    (``"gp"``, ``"nn"``, ``"rom"``, ``"mlp"``, ``"lgbm"``) anywhere, or a device kind
+    (``"sim"``, ``"log"``, ``"serial"``) in ``hardware/`` and ``hapticrom/`` (elsewhere
+    ``"log"`` is a scale), outside the registries (``surrogate/kinds.py``,
+    ``hardware/backends.py``, the output-choice study's learners); what is left validates a
+    loaded card (tests/architecture/test_kind_switches.py lists each).
 ``function-level imports``
     ``import``/``from ... import`` statements inside a function body (invisible to an import
     graph read at module level; ``if TYPE_CHECKING:`` blocks are not counted).
@@ -36,9 +38,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("fieldspec", "figstyle", "motorlaw", "fem", "surrogate", "studies", "planner",
             "calibration", "hardware", "hapticrom")
-SURROGATE_KINDS = frozenset({"gp", "nn", "rom", "mlp"})
+SURROGATE_KINDS = frozenset({"gp", "nn", "rom", "mlp", "lgbm"})
 DEVICE_KINDS = frozenset({"sim", "log", "serial"})
-REGISTRIES = frozenset({"surrogate/kinds.py", "hardware/backends.py"})
+#: The registries: the surrogate kinds, the devices, and the output-choice study's learners
+#: (its own peers, some named like a kind).
+REGISTRIES = frozenset({"surrogate/kinds.py", "hardware/backends.py",
+                        "studies/output_choice/learners.py"})
 
 __all__ = ["circles", "counts", "function_imports", "kind_switches", "own_field_errors",
            "source_files"]

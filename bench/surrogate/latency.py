@@ -44,9 +44,8 @@ def main() -> None:
     import torch
 
     torch.set_num_threads(1)
-    from surrogate.estimators.export import export_gp, export_nn
-    from surrogate.estimators.gp import GPSurrogateRegressor
-    from surrogate.estimators.nn import MLPEnsembleRegressor
+    from surrogate.estimators.gp import GPSurrogateRegressor, export_gp
+    from surrogate.estimators.nn import MLPEnsembleRegressor, export_nn
     from surrogate.pod import ProfileTargets
     from surrogate.runtime.encoding import encode
     from surrogate.runtime.predictor import Predictor, make_session

@@ -15,7 +15,8 @@ import argparse
 import json
 
 from studies.accuracy.designs import DATASET, load_study_data
-from studies.accuracy.learning_curves import GP_SIZES, NN_SIZES, curve, samples_for
+from studies.accuracy.learning_curves import curve, samples_for, sizes
+from surrogate import kinds
 
 
 def main() -> None:
@@ -26,8 +27,7 @@ def main() -> None:
     ap.add_argument("--json", default=None, help="write the table as JSON here")
     args = ap.parse_args()
     sd = load_study_data(args.data)
-    sizes = args.sizes or (GP_SIZES if args.kind == "gp" else NN_SIZES)
-    rows, _ = curve(args.kind, sd, sizes)
+    rows, _ = curve(args.kind, sd, args.sizes or sizes(kinds.get(args.kind)))
     for r in rows:
         print(f"n {r['n']:5d}  error median {r['worst_median']:.4f} p95 {r['worst_p95']:.4f}  "
               f"center {r['center_median']:.4f}  edge {r['edge_median']:.4f}  "

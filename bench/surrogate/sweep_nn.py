@@ -29,8 +29,8 @@ import numpy as np
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor, make_session
 from surrogate.sweep.export import export_sweep_nn
+from surrogate.sweep.nn import fit_sweep, split_nn_options
 from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
-from surrogate.sweep.train import _split_options, fit_sweep
 from surrogate.train import _calibration_rows, split
 
 
@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.model:
         return score_model(args)
     options = json.loads(args.options)
-    ours, _ = _split_options(dict(options))
+    ours, _ = split_nn_options(dict(options))
     data = load_sweep_datasets([args.data])
     tr, te = split(len(data.codes), args.test, args.seed)
     tr, _cal = _calibration_rows(tr, None, args.seed)

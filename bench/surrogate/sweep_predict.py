@@ -6,7 +6,7 @@ and after the factored decode, on the SAME members; and the factored basis's flo
         [--options '{"max_epochs": 20, "loss": "coefficients"}'] [--test-fraction 0.2] \\
         [--before 266242a] [--models nn-default MODEL_DIR ...] [--rounds 15] [--batch 10000]
 
-* One ensemble is fitted (``surrogate.sweep.train.fit_sweep``, ``--options``; the timing does
+* One ensemble is fitted (``surrogate.sweep.nn.fit_sweep``, ``--options``; the timing does
   not depend on its accuracy, only on its sizes: 256 x 256 x 5 members and the basis by
   default) on the training designs of ``--data`` (the split ``hapticrom train`` makes, seed 0,
   ``--test-fraction``).
@@ -51,13 +51,13 @@ from surrogate.sweep.export import (  # noqa: E402
     member_targets,
     reference_log_outputs,
 )
+from surrogate.sweep.nn import fit_sweep  # noqa: E402
 from surrogate.sweep.targets import (  # noqa: E402
     BandTargets,
     SweepData,
     load_sweep_datasets,
     log_magnitudes,
 )
-from surrogate.sweep.train import fit_sweep  # noqa: E402
 from surrogate.train import card_head, split  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -21,37 +21,41 @@ from typing import Any
 import numpy as np
 
 from surrogate import kinds
+from surrogate.kind import SurrogateKind
 from surrogate.pod import ProfileTargets
 
 from .designs import StudyData
 from .metric import Answer, answer_from_log, errors, summary
 
-__all__ = ["GP_SIZES", "NN_SIZES", "RUNTIME_KIND", "Fitted", "curve", "curves", "fit",
-           "heldout_errors", "samples_for"]
+__all__ = ["CAPPED_SIZES", "FULL_SIZES", "RUNTIME_KIND", "Fitted", "curve", "curves", "fit",
+           "heldout_errors", "samples_for", "sizes"]
 
-#: Training sizes (FE samples) and options of each kind the study trains. The GP stops at 500
-#: rows, the size of the shipped gp-default (its O(n^3) fit takes tens of seconds there); the
-#: NN and the MLP baseline go to every training row.
-GP_SIZES = (64, 128, 256, 500)
-NN_SIZES = (256, 512, 1024, 3277)
-GP_SIZES_QUICK = (32, 64)
-NN_SIZES_QUICK = (64, 128)
-#: NN options of ``--quick`` (a smoke test of the pipeline, not a converged model).
-NN_QUICK_OPTIONS = {"max_epochs": 30, "n_members": 2}
-MLP_QUICK_OPTIONS = {"max_iter": 200}
-LGBM_QUICK_OPTIONS = {"n_estimators": 200, "learning_rate": 0.05}
+#: Training sizes (FE samples) of each kind the study trains. A kind with a row cap (the GP:
+#: 500 rows, the size of the shipped gp-default; its O(n^3) fit takes tens of seconds there)
+#: stops at its cap; the others (NN, MLP baseline, LightGBM) go to every training row.
+CAPPED_SIZES = (64, 128, 256)
+FULL_SIZES = (256, 512, 1024, 3277)
+CAPPED_SIZES_QUICK = (32, 64)
+FULL_SIZES_QUICK = (64, 128)
 #: The kind also timed through the full run-time predictor.
 RUNTIME_KIND = "nn"
 
 
+def sizes(kind: SurrogateKind, quick: bool = False) -> tuple[int, ...]:
+    """The training sizes of ``kind``'s curve: up to its row cap when it has one (``quick``:
+    a smoke test of the pipeline)."""
+    if kind.row_cap is None:
+        return FULL_SIZES_QUICK if quick else FULL_SIZES
+    return CAPPED_SIZES_QUICK if quick else (*CAPPED_SIZES, kind.row_cap)
+
+
 def curves(quick: bool) -> dict[str, tuple[tuple[int, ...], dict[str, Any]]]:
-    """Kind -> (training sizes, options) of a full or a ``quick`` run."""
-    if quick:
-        return {"gp": (GP_SIZES_QUICK, {}), "nn": (NN_SIZES_QUICK, dict(NN_QUICK_OPTIONS)),
-                "mlp": (NN_SIZES_QUICK, dict(MLP_QUICK_OPTIONS)),
-                "lgbm": (NN_SIZES_QUICK, dict(LGBM_QUICK_OPTIONS))}
-    return {"gp": (GP_SIZES, {}), "nn": (NN_SIZES, {}), "mlp": (NN_SIZES, {}),
-            "lgbm": (NN_SIZES, {})}
+    """Kind -> (training sizes, options) of a full or a ``quick`` run (its
+    ``quick_options``: a smoke test of the pipeline, not a converged model), for every
+    steady-state kind of the registry."""
+    return {name: (sizes(kinds.KINDS[name], quick),
+                   dict(kinds.KINDS[name].quick_options) if quick else {})
+            for name in kinds.STEADY_KINDS}
 
 
 @dataclass

@@ -14,6 +14,7 @@ Sobol order, so the first rows cover the space); the study reports the rows each
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -23,7 +24,8 @@ from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 from sklearn.neural_network import MLPRegressor
 from sklearn.preprocessing import StandardScaler
 
-__all__ = ["LEARNERS", "Learner", "gp_each", "lightgbm_available", "make"]
+__all__ = ["LEARNERS", "Learner", "LearnerKind", "gp_each", "importable", "lightgbm_available",
+           "make"]
 
 Predict = Callable[[np.ndarray], np.ndarray]
 
@@ -93,18 +95,24 @@ def gp_each(seed: int, restarts: int = 1, lead: int = 4
     return _scaled(fit)
 
 
-def lightgbm_available() -> bool:
-    """Whether the ``lightgbm`` package imports (the ``bench`` extra installs it)."""
+def importable(package: str) -> bool:
+    """Whether ``package`` imports (the ``bench`` extra installs the optional peers)."""
     try:
-        import lightgbm  # noqa: F401
+        importlib.import_module(package)
     except ImportError:
         return False
     return True
 
 
+def lightgbm_available() -> bool:
+    """Whether the ``lightgbm`` package imports (the ``bench`` extra installs it)."""
+    return importable("lightgbm")
+
+
 def lgbm(seed: int, trees: int = 3000) -> Callable[[np.ndarray, np.ndarray], Predict]:
     """LightGBM: one booster per target column, ``trees`` trees at a learning rate of 0.02."""
     def fit(x: np.ndarray, y: np.ndarray) -> Predict:
+        # optional (the `bench` extra): only the LightGBM peer needs it
         import lightgbm
 
         models = [lightgbm.LGBMRegressor(n_estimators=trees, learning_rate=0.02, num_leaves=31,
@@ -116,26 +124,42 @@ def lgbm(seed: int, trees: int = 3000) -> Callable[[np.ndarray, np.ndarray], Pre
     return _scaled(fit)
 
 
+@dataclass(frozen=True)
+class LearnerKind:
+    """One learner of the study: what it is, how it is made from the options of :func:`make`
+    (``seed``, ``restarts``, ``lead``, ``trees``), whether the GP row cap applies, and the
+    package it needs beyond the study's own (None: none)."""
+
+    summary: str
+    build: Callable[[dict[str, int]], Callable[[np.ndarray, np.ndarray], Predict]]
+    capped: bool = False
+    notes: tuple[str, ...] = ()
+    needs: str | None = None
+
+
 #: Learner name on the command line -> what it is.
-LEARNERS = {"mlp": "scikit-learn MLPRegressor 3x128, early stopping",
-            "gp": "scikit-learn GP, Matern 5/2 ARD, one kernel for all targets",
-            "gp-each": "one scikit-learn GP per target, each its own Matern 5/2 ARD kernel",
-            "lgbm": "LightGBM, one booster per target"}
+LEARNERS: dict[str, LearnerKind] = {
+    "mlp": LearnerKind("scikit-learn MLPRegressor 3x128, early stopping",
+                       lambda o: mlp(o["seed"])),
+    "gp": LearnerKind("scikit-learn GP, Matern 5/2 ARD, one kernel for all targets",
+                      lambda o: gp(o["seed"]), capped=True),
+    "gp-each": LearnerKind("one scikit-learn GP per target, each its own Matern 5/2 ARD kernel",
+                           lambda o: gp_each(o["seed"], o["restarts"], o["lead"]), capped=True,
+                           notes=("restarts", "lead")),
+    "lgbm": LearnerKind("LightGBM, one booster per target", lambda o: lgbm(o["seed"], o["trees"]),
+                        notes=("trees",), needs="lightgbm"),
+}
 
 
 def make(name: str, seed: int, *, gp_rows: int | None = None, restarts: int = 1,
          lead: int = 4, trees: int = 3000) -> Learner:
     """The learner called ``name`` (:data:`LEARNERS`); GPs capped at ``gp_rows`` rows."""
-    if name == "mlp":
-        return Learner(name, mlp(seed))
-    if name == "gp":
-        return Learner(name, gp(seed), gp_rows)
-    if name == "gp-each":
-        return Learner(name, gp_each(seed, restarts, lead), gp_rows,
-                       {"restarts": restarts, "lead": lead})
-    if name == "lgbm":
-        if not lightgbm_available():
-            raise ValueError("learner lgbm needs the lightgbm package (pip install "
-                             "'hapticrom[bench]')")
-        return Learner(name, lgbm(seed, trees), notes={"trees": trees})
-    raise ValueError(f"learner {name!r}: allowed {', '.join(LEARNERS)}")
+    if name not in LEARNERS:
+        raise ValueError(f"learner {name!r}: allowed {', '.join(LEARNERS)}")
+    kind = LEARNERS[name]
+    if kind.needs is not None and not importable(kind.needs):
+        raise ValueError(f"learner {name} needs the {kind.needs} package (pip install "
+                         "'hapticrom[bench]')")
+    options = {"seed": seed, "restarts": restarts, "lead": lead, "trees": trees}
+    return Learner(name, kind.build(options), gp_rows if kind.capped else None,
+                   {k: options[k] for k in kind.notes})

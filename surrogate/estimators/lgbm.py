@@ -39,6 +39,7 @@ STD_FRACTION, STD_MIN_ROWS = 0.1, 20
 
 def _lightgbm() -> Any:
     try:
+        # optional (the `bench` extra): only the LightGBM peer needs it
         import lightgbm
     except ImportError as exc:
         raise ImportError("the lgbm kind needs the lightgbm package: pip install "
@@ -201,4 +202,5 @@ def _card_extras(est: LightGBMRegressor) -> dict[str, Any]:
 KIND = SurrogateKind(
     name="lgbm", summary="LightGBM peer, one booster per target (harmonic amplitudes)",
     estimator=LightGBMRegressor, export=export_lgbm, parity_tol=1e-5, dtype="float64",
-    engine="lightgbm", card_extras=_card_extras)
+    engine="lightgbm", card_extras=_card_extras,
+    quick_options={"n_estimators": 200, "learning_rate": 0.05})

@@ -142,4 +142,5 @@ def export_mlp(estimator: MLPBaselineRegressor, B: np.ndarray, b: np.ndarray,
 
 KIND = SurrogateKind(
     name="mlp", summary="scikit-learn MLPRegressor baseline (harmonic amplitudes)",
-    estimator=MLPBaselineRegressor, export=export_mlp, parity_tol=1e-4, dtype="float32")
+    estimator=MLPBaselineRegressor, export=export_mlp, parity_tol=1e-4, dtype="float32",
+    quick_options={"max_iter": 200})

@@ -13,7 +13,7 @@ outputs, ready for ONNX export.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -21,11 +21,11 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from surrogate.estimators.export import export_nn
+from surrogate.estimators.export import export_module
 from surrogate.estimators.params import check_number, training_data
 from surrogate.kind import SurrogateKind
 
-__all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor"]
+__all__ = ["KIND", "EnsembleModule", "MLPEnsembleRegressor", "export_nn"]
 
 #: ``error(out, rows, training) -> (members, rows, q)`` squared errors of a training step
 Error = Callable[[torch.Tensor, Any, bool], torch.Tensor]
@@ -280,8 +280,16 @@ def _in_memory(est: MLPEnsembleRegressor, B: np.ndarray,
     return run
 
 
+def export_nn(estimator: Any, B: np.ndarray, b: np.ndarray,
+              metadata: Mapping[str, Any]) -> bytes:
+    """ONNX bytes of a fitted :class:`surrogate.estimators.nn.MLPEnsembleRegressor` (float32
+    input)."""
+    return export_module(estimator.to_module(B, b), estimator.n_features_in_, metadata)
+
+
 #: float32 graph of the ensemble; its std is the members' spread, compared through the mean.
 KIND = SurrogateKind(
     name="nn", summary="MLP ensemble in torch with the members' spread as std (harmonic "
     "amplitudes)", estimator=MLPEnsembleRegressor, export=export_nn, parity_tol=1e-4,
-    dtype="float32", engine="torch", in_memory=_in_memory)
+    dtype="float32", engine="torch", in_memory=_in_memory,
+    quick_options={"max_epochs": 30, "n_members": 2})

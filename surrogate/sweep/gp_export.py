@@ -31,12 +31,14 @@ import numpy as np
 import torch
 
 from surrogate.estimators.export import export_module
+from surrogate.kind import SweepKind, estimator_params
 from surrogate.runtime.encoding import encode
+from surrogate.runtime.predictor import Predictor
 from surrogate.sweep.export import BandDecoder, reference_log_outputs
-from surrogate.sweep.gp import SweepGP, linearised_log_std
+from surrogate.sweep.gp import SweepGP, fit_sweep_gp, linearised_log_std, split_gp_options
 from surrogate.sweep.targets import TINY, BandTargets, SweepData, Z, pair_rows
 
-__all__ = ["GP_PARITY_TOL", "SweepGPModule", "covariance_tables", "export_sweep_gp",
+__all__ = ["GP_PARITY_TOL", "SWEEP", "SweepGPModule", "covariance_tables", "export_sweep_gp",
            "gp_parity"]
 
 #: Largest |d ln| of log_mean, and relative difference of log_std (|d std| / max(std,
@@ -205,3 +207,23 @@ def gp_parity(est: SweepGP, targets: BandTargets, session: Any, data: SweepData,
         raise RuntimeError(f"exported sweep GP's log_std differs from its numpy rebuild by "
                            f"{out['log_std_rel']:.3g} relative (tolerance {GP_PARITY_TOL})")
     return out
+
+
+def _fit(checked: dict[str, Any], data: SweepData, designs: np.ndarray, seed: int,
+         n_modes: int | None, normal: bool) -> tuple[SweepGP, BandTargets, dict[str, Any]]:
+    """(estimator, targets, the card's training entries) of the GP on ``designs``."""
+    est, targets = fit_sweep_gp(data, designs, seed=seed, n_modes=n_modes, options=checked)
+    return est, targets, {"gp": est.card(), "estimator": estimator_params(est)}
+
+
+def _parity(est: SweepGP, targets: BandTargets, predictor: Predictor, data: SweepData,
+            designs: np.ndarray, normal: bool) -> dict[str, Any]:
+    parity = gp_parity(est, targets, predictor.session, data, data.all_specs, designs, normal)
+    return {"export_parity_max_abs_dln": parity["log_mean"],
+            "export_parity": parity}  # with log_std's relative difference
+
+
+#: The GP's part of the sweep pipeline (:class:`surrogate.kind.SweepKind`, joined to its kind in
+#: :mod:`surrogate.kinds`).
+SWEEP = SweepKind(check_options=split_gp_options, fit=_fit, export=export_sweep_gp,
+                  parity=_parity)

@@ -37,12 +37,11 @@ import numpy as np
 from fieldspec import FieldError
 from surrogate.data.columns import COMPONENTS
 from surrogate.data.store import Store
-from surrogate.features import codes_from_frame, input_specs
+from surrogate.features import codes_from_frame, edge_radii_mm, input_specs, merge_specs
 from surrogate.pod import POD
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.encoding import InputSpec
 from surrogate.sweep.basis import factor_block
-from surrogate.train import _edge_radius, _merge_specs
 
 __all__ = ["FREQUENCY_INPUT", "BandTargets", "SweepData", "check_not_mixed", "frequency_spec",
            "is_sweep", "load_sweep_datasets", "log_magnitudes", "log_normal",
@@ -129,7 +128,7 @@ def load_sweep_datasets(paths: Sequence[str | Path], *, categorical: str = "oneh
         if not manifest.get("band"):
             raise FieldError("--data", f"--data {path}: not a sweep dataset (no band)")
         these = input_specs(manifest["space"]["parameter"], categorical=categorical)
-        specs = these if specs is None else _merge_specs(specs, these, str(path))
+        specs = these if specs is None else merge_specs(specs, these, str(path))
         f = np.asarray(manifest["band"]["frequency_hz"], dtype=float)
         g = np.asarray(manifest.get("profile_grid_mm") or [], dtype=float)
         if band is None:
@@ -148,7 +147,7 @@ def load_sweep_datasets(paths: Sequence[str | Path], *, categorical: str = "oneh
                 raise ValueError(f"{path}: some rows' {col} differ from the manifest's")
         codes.append(codes_from_frame(df, these))
         responses.append(_response(df, f.size, g.size))
-        radii.append(_edge_radius(df))
+        radii.append(edge_radii_mm(df))
         sources.append({"path": str(path), "manifest_sha256": manifest_sha256(path),
                         "space_hash": manifest.get("space_hash"), "rows": len(df),
                         "band_hz": [float(f[0]), float(f[-1]), float(f[1] - f[0])]})

@@ -65,7 +65,7 @@ def test_gp_onnx_parity_mean_and_std(kernel):
     """The exported graph reproduces sklearn's mean AND std, per kernel shipped."""
     import onnxruntime as ort
 
-    from surrogate.estimators.export import export_gp
+    from surrogate.estimators.gp import export_gp
 
     X, Y, Xt, B, b = _data()
     gp = GPSurrogateRegressor(kernel=kernel).fit(X, Y)
@@ -86,7 +86,7 @@ def test_nn_onnx_parity():
     import onnxruntime as ort
     import torch
 
-    from surrogate.estimators.export import export_nn
+    from surrogate.estimators.nn import export_nn
 
     X, Y, Xt, B, b = _data()
     nn = MLPEnsembleRegressor(max_epochs=30, n_members=3, hidden=(16, 16)).fit(X, Y)

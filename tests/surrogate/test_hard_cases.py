@@ -35,7 +35,7 @@ def test_gp_on_nearly_duplicate_points_fits_and_predicts_finite(gap, noise_bound
     graph agrees with scikit-learn."""
     import onnxruntime as ort
 
-    from surrogate.estimators.export import export_gp
+    from surrogate.estimators.gp import export_gp
 
     X, y = _near_duplicates(gap)
     gp = GPSurrogateRegressor(noise=noise_bounds[0], noise_bounds=noise_bounds).fit(X, y)

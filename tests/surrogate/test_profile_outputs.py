@@ -80,8 +80,7 @@ def test_trained_normal_model_predicts_both_profiles(normal_model):
 def test_normal_block_round_trip_onnx_equals_the_estimator(normal_dataset):
     """The run-time predictor's profile_normal_um is the in-memory ensemble's through the
     output map, to float32 precision (what training's export parity asserts)."""
-    from surrogate.estimators.export import export_nn
-    from surrogate.estimators.nn import MLPEnsembleRegressor
+    from surrogate.estimators.nn import MLPEnsembleRegressor, export_nn
     from surrogate.runtime.encoding import encode
     from surrogate.runtime.predictor import Predictor, make_session
     from surrogate.train import load_datasets

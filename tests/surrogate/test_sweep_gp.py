@@ -143,7 +143,7 @@ def test_bad_options_and_other_kinds_are_refused_naming_them(data, tmp_path):
         train_sweep([path], "gp", tmp_path / "g", options={"scale": "each"})
     with pytest.raises(ValueError, match="noise_bounds"):
         split_gp_options({"noise": 1e-9})
-    with pytest.raises(FieldError, match="sweep datasets train the nn and gp kinds") as err:
+    with pytest.raises(FieldError, match="sweep datasets train the gp and nn kinds") as err:
         train_sweep([path], "lgbm", tmp_path / "l")
     assert err.value.field == "--kind"
     from hapticrom.cli import main

@@ -13,13 +13,14 @@ from fieldspec import FieldError
 from surrogate.runtime.encoding import PredictorInputError, encode
 from surrogate.runtime.predictor import Predictor, load_predictor, make_session
 from surrogate.sweep.export import export_sweep_nn, member_targets, reference_log_outputs
+from surrogate.sweep.nn import fit_sweep
 from surrogate.sweep.targets import (
     BandTargets,
     check_not_mixed,
     load_sweep_datasets,
     log_magnitudes,
 )
-from surrogate.sweep.train import fit_sweep, train_sweep
+from surrogate.sweep.train import train_sweep
 from surrogate.train import split
 
 OPTIONS = {"hidden": (16, 16), "n_members": 3, "max_epochs": 60, "centre_modes": 6,
@@ -146,7 +147,7 @@ def test_sweep_and_single_frequency_data_mixed_are_refused(sweep_data, tmp_path)
 
 
 def test_other_kinds_and_bad_sweep_options_are_refused(sweep_data, tmp_path):
-    with pytest.raises(FieldError, match="sweep datasets train the nn and gp kinds") as err:
+    with pytest.raises(FieldError, match="sweep datasets train the gp and nn kinds") as err:
         train_sweep([sweep_data], "mlp", tmp_path / "g")
     assert err.value.field == "--kind"
     with pytest.raises(ValueError, match="loss = 'l1': allowed 'magnitude', 'coefficients'"):
