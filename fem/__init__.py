@@ -9,11 +9,13 @@ VTK at import time).
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 SOLVER_VERSION = "0.1.0"
 
-# public name -> module that defines it (loaded lazily by __getattr__)
+# public name -> module that defines it (loaded lazily by __getattr__; no import of them here,
+# not even for type checkers: the solver's modules import SOLVER_VERSION from this face, so
+# the face importing them back would be a circle)
 _LAZY = {
     "LoadKind": "fem.scene",
     "Scene": "fem.scene",
@@ -46,22 +48,6 @@ __all__ = [
     "scene_to_dict",
     "simulate",
 ]
-
-if TYPE_CHECKING:
-    from fem.materials import Material, get_material
-    from fem.scene import (
-        LoadKind,
-        Scene,
-        SceneError,
-        dump_scene_toml,
-        load_scene,
-        scene_from_dict,
-        scene_hash,
-        scene_to_dict,
-    )
-    from fem.simulation import SimulationResult, simulate
-    from fem.sweep import SweepResult
-
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:

@@ -10,21 +10,57 @@ its force follows the frequency, its transient load history). The solver asks th
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, ClassVar
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-if TYPE_CHECKING:
-    from ..domain import Domain
-    from ..haptic_unit import UnitLayout
-    from ..problem import Problem
-    from ..scene import Scene
+from ..domain import Domain
 
-__all__ = ["ACTUATORS", "Actuator", "actuator", "register"]
+__all__ = ["ACTUATORS", "Actuator", "ProblemView", "SceneView", "UnitPlacement", "actuator",
+           "register"]
 
 History = Callable[[NDArray], NDArray]
+
+
+# What an actuator is handed, as the interfaces it reads: the scene, the built problem and the
+# unit layout sit above the actuators (the scene's schema is made from this registry), so the
+# actuators name what they read instead of importing them (no circle in fem).
+class SceneView(Protocol):
+    """What an actuator reads of a scene (:class:`fem.scene.Scene` is one): its ``[analysis]``,
+    ``[load]`` and ``[unit]`` tables."""
+
+    @property
+    def analysis(self) -> Any: ...
+
+    @property
+    def load(self) -> Any: ...
+
+    @property
+    def unit(self) -> Any: ...
+
+
+class UnitPlacement(Protocol):
+    """Where a unit sits (:class:`fem.haptic_unit.UnitLayout` is one): heights [m] of its
+    centre and rotor plane, and the radius [m] of its outer edge."""
+
+    @property
+    def center_z(self) -> float: ...
+
+    @property
+    def rotor_z(self) -> float: ...
+
+    @property
+    def edge(self) -> float: ...
+
+
+class ProblemView(Protocol):
+    """What an actuator reads of a built problem (:class:`fem.problem.Problem` is one): which
+    physical effects are on."""
+
+    @property
+    def effects(self) -> Mapping[str, bool]: ...
 
 
 class Actuator:
@@ -59,32 +95,32 @@ class Actuator:
         """The Fourier mode excited: 0 / 1 for a "normal" / "tangential" ``load.direction``."""
         return 0 if direction == "normal" else 1
 
-    def nodal_load(self, scene: Scene, domain: Domain, mode: int,
-                   lay: UnitLayout | None) -> NDArray:
+    def nodal_load(self, scene: SceneView, domain: Domain, mode: int,
+                   lay: UnitPlacement | None) -> NDArray:
         """Full nodal load vector [N] at the drive amplitude of a steady solve (a transient
         multiplies it by :meth:`load_history`)."""
         raise NotImplementedError
 
-    def r_breaks(self, scene: Scene) -> list[float]:
+    def r_breaks(self, scene: SceneView) -> list[float]:
         """Radii [m] the mesh must have a grid line at (besides a unit's own)."""
         return []
 
-    def edge(self, scene: Scene, lay: UnitLayout | None) -> float | None:
+    def edge(self, scene: SceneView, lay: UnitPlacement | None) -> float | None:
         """Radius [m] of the load footprint's edge: the unit's, else None (a point)."""
         return lay.edge if lay is not None else None
 
-    def transient_frequency_hz(self, scene: Scene) -> float:
+    def transient_frequency_hz(self, scene: SceneView) -> float:
         """The frequency [Hz] a transient runs at (mesh and absorbers are sized for it)."""
         return float(_get(scene, self.transient_frequency_field))
 
     def load_scale(self, omega: NDArray, omega_ref: float,
-                   scene: Scene | None = None) -> NDArray:
+                   scene: SceneView | None = None) -> NDArray:
         """Force at angular frequencies ``omega`` [rad/s] relative to the force of
         :meth:`nodal_load` at ``omega_ref`` [rad/s] (a sweep scales its one load by it) for
         ``scene``'s actuator. Default: a force that does not depend on frequency."""
         return np.ones_like(np.asarray(omega, dtype=float))
 
-    def load_history(self, scene: Scene, problem: Problem) -> tuple[History, int]:
+    def load_history(self, scene: SceneView, problem: ProblemView) -> tuple[History, int]:
         """(history(t) -> (n_t, k) amplitudes, k) of a transient: the nodal load is repeated in
         k columns, each weighted by one column of the history. Default: a sine at
         ``analysis.frequency_hz`` whose amplitude follows the voltage schedule relative to the

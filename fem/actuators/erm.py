@@ -7,21 +7,14 @@ their sources there); its speed law, spin-up and spin-down come from ``motorlaw`
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
 from motorlaw import DEFAULTS as MOTOR_LAW
 
 from .. import loads, motor
-from .base import Actuator, History, register
-
-if TYPE_CHECKING:
-    from ..domain import Domain
-    from ..haptic_unit import UnitLayout
-    from ..problem import Problem
-    from ..scene import Scene
+from ..domain import Domain
+from .base import Actuator, History, ProblemView, SceneView, UnitPlacement, register
 
 
 @register
@@ -39,8 +32,8 @@ class CoinERM(Actuator):
     def fourier_mode(self, direction: str) -> int:
         return 1  # the unbalance force is parallel to the skin whatever load.direction says
 
-    def nodal_load(self, scene: Scene, domain: Domain, mode: int,
-                   lay: UnitLayout | None) -> NDArray:
+    def nodal_load(self, scene: SceneView, domain: Domain, mode: int,
+                   lay: UnitPlacement | None) -> NDArray:
         """At the rotor plane: the unbalance force at ``analysis.frequency_hz`` in a steady
         solve, 1 N in a transient (scaled by the motor's force history)."""
         steady = scene.analysis.kind != "transient"
@@ -48,11 +41,11 @@ class CoinERM(Actuator):
         return loads.axis_point_force(domain, 1, force, z=lay.rotor_z)
 
     def load_scale(self, omega: NDArray, omega_ref: float,
-                   scene: Scene | None = None) -> NDArray:
+                   scene: SceneView | None = None) -> NDArray:
         """The unbalance force m e omega^2 grows with the square of the speed."""
         return (np.asarray(omega, dtype=float) / omega_ref) ** 2
 
-    def load_history(self, scene: Scene, problem: Problem) -> tuple[History, int]:
+    def load_history(self, scene: SceneView, problem: ProblemView) -> tuple[History, int]:
         """The rotating force's two components [N] from the motor law's speed under the
         voltage schedule (spin-up and spin-down time constants when the effect is on)."""
         a = scene.analysis

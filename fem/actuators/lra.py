@@ -23,7 +23,7 @@ transient).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,11 +31,8 @@ from numpy.typing import NDArray
 from motorlaw.lra import DEFAULTS as LAW
 from motorlaw.lra import ResonantDrive
 
-from .base import register
+from .base import SceneView, register
 from .normal import NormalActuator
-
-if TYPE_CHECKING:
-    from ..scene import Scene
 
 
 @register
@@ -53,7 +50,7 @@ class LRA(NormalActuator):
     MOVING_MASS_KG: ClassVar[float] = LAW["moving_mass_kg"]
     QUALITY_FACTOR: ClassVar[float] = LAW["quality_factor"]
 
-    def law(self, scene: Scene | None = None) -> ResonantDrive:
+    def law(self, scene: SceneView | None = None) -> ResonantDrive:
         """The drive law of ``scene``'s LRA: its ``[unit.lra]`` table, else the defaults."""
         part = scene.unit.lra if scene is not None and scene.unit is not None else None
         if part is None:
@@ -64,17 +61,17 @@ class LRA(NormalActuator):
                              rated_voltage_V=part.rated_voltage_V,
                              max_voltage_V=part.max_voltage_V)
 
-    def response(self, frequency_hz: NDArray | float, scene: Scene | None = None) -> NDArray:
+    def response(self, frequency_hz: NDArray | float, scene: SceneView | None = None) -> NDArray:
         """Force at ``frequency_hz`` [Hz] relative to the force at resonance [-] (1 there)."""
         return self.law(scene).response(frequency_hz)
 
-    def force_N(self, scene: Scene) -> float:
+    def force_N(self, scene: SceneView) -> float:
         """Force amplitude [N] on the housing at ``analysis.frequency_hz``."""
         return float(scene.unit.actuator.force_N
                      * self.response(scene.analysis.frequency_hz, scene))
 
     def load_scale(self, omega: NDArray, omega_ref: float,
-                   scene: Scene | None = None) -> NDArray:
+                   scene: SceneView | None = None) -> NDArray:
         """The resonator's force at ``omega`` over its force at ``omega_ref`` [rad/s]."""
         to_hz = 1 / (2 * np.pi)
         law = self.law(scene)

@@ -7,17 +7,11 @@ whose amplitude follows the voltage schedule relative to the unit's rated voltag
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from numpy.typing import NDArray
 
 from .. import loads
-from .base import Actuator, register
-
-if TYPE_CHECKING:
-    from ..domain import Domain
-    from ..haptic_unit import UnitLayout
-    from ..scene import Scene
+from ..domain import Domain
+from .base import Actuator, SceneView, UnitPlacement, register
 
 
 @register
@@ -33,10 +27,10 @@ class NormalActuator(Actuator):
     def fourier_mode(self, direction: str) -> int:
         return 0
 
-    def force_N(self, scene: Scene) -> float:
+    def force_N(self, scene: SceneView) -> float:
         """Force amplitude [N] on the housing at ``analysis.frequency_hz``."""
         return scene.unit.actuator.force_N
 
-    def nodal_load(self, scene: Scene, domain: Domain, mode: int,
-                   lay: UnitLayout | None) -> NDArray:
+    def nodal_load(self, scene: SceneView, domain: Domain, mode: int,
+                   lay: UnitPlacement | None) -> NDArray:
         return loads.axis_point_force(domain, 0, self.force_N(scene), z=lay.center_z)

@@ -3,17 +3,11 @@ normal (Fourier mode 0) or tangential (mode 1) by ``load.direction``."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from numpy.typing import NDArray
 
 from .. import loads
-from .base import Actuator, register
-
-if TYPE_CHECKING:
-    from ..domain import Domain
-    from ..haptic_unit import UnitLayout
-    from ..scene import Scene
+from ..domain import Domain
+from .base import Actuator, SceneView, UnitPlacement, register
 
 
 @register
@@ -25,14 +19,14 @@ class PressurePatch(Actuator):
     order = 0
     load_fields = ("radius_mm", "amplitude_Pa")
 
-    def nodal_load(self, scene: Scene, domain: Domain, mode: int,
-                   lay: UnitLayout | None) -> NDArray:
+    def nodal_load(self, scene: SceneView, domain: Domain, mode: int,
+                   lay: UnitPlacement | None) -> NDArray:
         t = scene.load.amplitude_Pa
         return loads.surface_traction(domain, mode, scene.load.radius_m,
                                       (0.0, t, 0.0) if mode == 0 else (t, 0.0, -t))
 
-    def r_breaks(self, scene: Scene) -> list[float]:
+    def r_breaks(self, scene: SceneView) -> list[float]:
         return [scene.load.radius_m]
 
-    def edge(self, scene: Scene, lay: UnitLayout | None) -> float | None:
+    def edge(self, scene: SceneView, lay: UnitPlacement | None) -> float | None:
         return scene.load.radius_m

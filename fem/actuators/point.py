@@ -3,17 +3,11 @@ tangential (mode 1) by ``load.direction``."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from numpy.typing import NDArray
 
 from .. import loads
-from .base import Actuator, register
-
-if TYPE_CHECKING:
-    from ..domain import Domain
-    from ..haptic_unit import UnitLayout
-    from ..scene import Scene
+from ..domain import Domain
+from .base import Actuator, SceneView, UnitPlacement, register
 
 
 @register
@@ -25,6 +19,6 @@ class PointForce(Actuator):
     order = 1
     load_fields = ("force_N",)
 
-    def nodal_load(self, scene: Scene, domain: Domain, mode: int,
-                   lay: UnitLayout | None) -> NDArray:
+    def nodal_load(self, scene: SceneView, domain: Domain, mode: int,
+                   lay: UnitPlacement | None) -> NDArray:
         return loads.axis_point_force(domain, mode, scene.load.force_N)

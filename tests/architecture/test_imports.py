@@ -1,14 +1,22 @@
-"""Imports visible (issue 22): no import circle inside a package, and an import inside a
-function only where a measured start-up cost or an optional dependency asks for it, each with
-its reason here. Counted by bench/structure/count_structure.py (every import, functions and
-``TYPE_CHECKING`` included)."""
+"""Imports visible (issues 22 and 35): no import circle inside a package (package faces and
+``TYPE_CHECKING`` imports included), and an import inside a function only where a measured
+start-up cost or an optional dependency asks for it, each with its reason here and a comment
+beside it. Counted by bench/structure/count_structure.py (every import, functions and
+``TYPE_CHECKING`` included) and by grimp (import-linter's graph)."""
 
 from __future__ import annotations
 
-from bench.structure.count_structure import circles, function_imports
+import grimp
+import numpy as np
+import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
-#: Circles still standing, each with why: none (the last, fem/scene, went when a Scene's
-#: checks became a hook the reader registers, fem.scene.model.SCENE_CHECKS).
+from bench.structure.count_structure import PACKAGES, ROOT, circles, function_imports
+
+#: Circles still standing, each with why: none (fem/scene went when a Scene's checks became a
+#: hook the reader registers, fem.scene.model.SCENE_CHECKS; the actuators' when they named what
+#: they read of a scene as interfaces, fem.actuators.base.SceneView, instead of importing it).
 KNOWN_CIRCLES: dict[tuple[str, ...], str] = {}
 
 #: Modules imported lazily anywhere, with the measured reason (numpy already loaded;
@@ -19,10 +27,8 @@ LAZY_MODULES = {
     "cycler": "a figure's colour cycle: loaded with matplotlib",
     "torch": "3.9 s; only the NN kind needs it",
     "sklearn": "4.8 s; only training needs it",
-    "onnx": "0.55 s; only export and graph inspection need it",
     "scipy": "scipy.signal 0.55 s, scipy.optimize 0.32 s; planning imports no scipy at all "
              "(tests/planner/test_plan.py)",
-    "pandas": "0.26 s; only reading a dataset into a frame needs it",
     "serial": "pyserial, the `hardware` extra: present only where an array is driven",
     "cholespy": "optional sparse Cholesky backend, tried when installed",
     "threadpoolctl": "optional: limits BLAS threads when installed",
@@ -32,7 +38,7 @@ LAZY_MODULES = {
     "tqdm": "progress bars, drawn only on a terminal",
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
     "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it "
-                "(surrogate/estimators/lgbm.py)",
+                "(surrogate/estimators/lgbm.py, the output-choice study)",
 }
 
 #: (file, imported module) -> reason, for project modules imported inside a function.
@@ -78,3 +84,33 @@ def test_function_level_imports_are_only_where_a_reason_is_given():
 def test_the_allow_list_has_no_stale_entries():
     used = {(path, module) for path, _, _, module in function_imports()}
     assert set(LAZY_PLACES) <= used
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_no_import_circle_in_the_package_graph(package):
+    """Every import grimp sees (package faces, functions, ``TYPE_CHECKING``) forms no circle."""
+    graph = grimp.build_graph(package, include_external_packages=False)
+    names = sorted(graph.modules)
+    index = {m: i for i, m in enumerate(names)}
+    edges = [(index[a], index[b]) for a in names
+             for b in graph.find_modules_directly_imported_by(a)]
+    rows, cols = (np.array(x, dtype=int) for x in zip(*edges, strict=True)) if edges else ([], [])
+    adjacency = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(names), len(names)))
+    _, label = connected_components(adjacency, directed=True, connection="strong")
+    groups = [[names[i] for i in np.flatnonzero(label == k)] for k in np.unique(label)]
+    assert [g for g in groups if len(g) > 1] == []
+
+
+def test_every_function_level_import_says_why_beside_it():
+    """A comment on the import, or above it in the same function."""
+    silent = []
+    for path, line, func, module in function_imports():
+        lines = (ROOT / path).read_text(encoding="utf-8").splitlines()[:line]
+        body = []
+        for text in reversed(lines):
+            body.append(text)
+            if text.lstrip().startswith(("def ", "async def ")):
+                break
+        if not any("#" in text for text in body):
+            silent.append(f"{path}:{line} {func}: {module}")
+    assert silent == [], "\n".join(silent)
