@@ -81,6 +81,7 @@ def one_blas_thread() -> Iterator[None]:
     """Limit the BLAS libraries loaded in this process to one thread inside the block (also
     usable as a decorator). Costs about 0.1 ms."""
     global _controller
+    # optional: limits the BLAS threads when installed
     from threadpoolctl import ThreadpoolController
 
     if _controller is None:  # after numpy and scipy loaded their BLAS
@@ -129,6 +130,7 @@ class _Cholmod:
     """CHOLMOD's supernodal Cholesky (SuiteSparse, through cholespy) of a real SPD matrix."""
 
     def __init__(self, A: sp.spmatrix) -> None:
+        # optional: the CHOLMOD backend, tried when installed
         from cholespy import CholeskySolverD, MatrixType
 
         if np.iscomplexobj(A.data):

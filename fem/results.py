@@ -62,6 +62,7 @@ _VTK_TYPE = {1: "quad", 2: "quad9"}
 def write_vtk(path: str, domain: Domain, nodal: NDArray) -> None:
     """Write the (r, z) field for ParaView: coordinates in mm, displacements in um, real and
     imaginary parts of each Fourier amplitude, the magnitude, and the material per cell."""
+    # optional: only the VTU export needs it
     import meshio
 
     m = domain.mesh

@@ -56,6 +56,7 @@ def color(i: int) -> str:
 
 
 def _pyplot():
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     import matplotlib
 
     if "MPLBACKEND" not in os.environ:
@@ -68,6 +69,7 @@ def _pyplot():
 @contextmanager
 def style() -> Iterator[None]:
     """Apply :data:`RC` for the duration of the block (figures keep the style when saved)."""
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     import matplotlib
     from cycler import cycler
 
@@ -111,6 +113,7 @@ def annotate(fig: Any, title: str, *, design: str | None, frequency: str | None,
 def plain_log_ticks(ax: Any) -> None:
     """Label a log y axis with plain numbers (2, 5, 10) instead of 2x10^0 and 5x10^0; minor
     ticks are labelled only when the axis spans less than two decades (call after plotting)."""
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
     fmt = FuncFormatter(lambda v, _: f"{v:g}")
@@ -140,6 +143,7 @@ SOFTWARE = "hapticrom"
 def _save_png(fig: Any, path: str | os.PathLike, kwargs: dict[str, Any]) -> None:
     """A 256-colour palette PNG without dithering: line plots hold far fewer colours, so it
     looks the same at a third of the size (README figures stay well under 150 kB)."""
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     from PIL import Image, PngImagePlugin
 
     buf = io.BytesIO()

@@ -23,6 +23,7 @@ def progress_bar(enabled: bool, unit: str, desc: str
     if not (enabled and wanted()):
         yield None
         return
+    # lazy: a progress bar, drawn only on a terminal
     from tqdm import tqdm
 
     bar = tqdm(total=None, unit=unit.split()[-1], desc=desc, file=sys.stderr,

@@ -190,6 +190,7 @@ class SimDevice(Device):
 def _write_figures(out: Path, freq: float, t: NDArray, e: NDArray, sites: NDArray, k: int,
                    frames: range, x: NDArray, y: NDArray, a: NDArray, unit: UnitField,
                    pos: NDArray) -> list[Path]:
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     import matplotlib
 
     matplotlib.use("Agg")

@@ -39,6 +39,7 @@ def rendered(C: NDArray, levels: NDArray) -> NDArray:
 def drive_levels(C: NDArray, target_um: NDArray, max_level: float = 1.0) -> DriveSolution:
     """Levels rendering ``target_um`` at the sites of crosstalk matrix ``C`` (C[i, j]: amplitude
     at site i of unit j at level 1) as closely as the bounds allow, in the power sense."""
+    # lazy: planning imports no scipy (tests/planner/test_plan.py); only drive levels do
     from scipy.optimize import lsq_linear
 
     C = np.asarray(C, dtype=float)

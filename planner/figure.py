@@ -36,6 +36,7 @@ _PLOTTED = {
 
 def curve_styles(n: int) -> list[tuple[str, str]]:
     """``n`` distinct (colour, line style) pairs (module docstring)."""
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     from matplotlib import colormaps
     from matplotlib.colors import to_hex
 
@@ -52,6 +53,7 @@ def curve_styles(n: int) -> list[tuple[str, str]]:
 
 
 def _array_panel(ax: Any, plan: Any) -> None:
+    # lazy: matplotlib takes 1.9 s to import, and only a figure needs it
     from matplotlib.patches import Circle
 
     best, crit = plan.best, plan.request.criterion

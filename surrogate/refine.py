@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from surrogate.data.generate import generate
 from surrogate.data.plan import plan_samples
@@ -93,8 +94,6 @@ def _round(path: Path, batch: int, seed: int, workers: int | None, progress: boo
     pool = [p for p in planned if p.index not in by_index]
     if len(pool) < batch:
         raise ValueError(f"batch = {batch}: only {len(pool)} new candidate points")
-    import pandas as pd
-
     frame = pd.DataFrame([p.values for p in pool])
     Xp = encode(codes_from_frame(frame, data.specs), data.specs)
     score = uncertainty(model, Xp)

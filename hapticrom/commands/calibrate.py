@@ -67,6 +67,7 @@ def _seed(text: str) -> int:
 
 def _model(args: argparse.Namespace, measurement: Any) -> str:
     """``--model``, or the model the measurement needs (printed with the reason)."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from calibration.forward import needs_normal
     from surrogate.runtime.models import find_model
 
@@ -82,6 +83,7 @@ def _model(args: argparse.Namespace, measurement: Any) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from calibration import calibrate, calibration_document, read_measurement
     from surrogate.runtime import load_predictor
 
@@ -108,6 +110,7 @@ def _run(args: argparse.Namespace) -> int:
             tmp.write_text(json.dumps(doc, indent=1) + "\n")
         print(f"wrote {args.out}")
     if args.plot:
+        # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
         from calibration.plot import write_calibration_plot
 
         with atomic_path(args.plot) as tmp:
@@ -157,6 +160,7 @@ def _print(doc: dict[str, Any], n_points: int) -> None:
 def _dataset_path(model: str) -> Path:
     """The model's training dataset (its space builds the FE scene), relative to the working
     directory or to the repository holding ``models/NAME``."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.runtime.card import read_card
 
     rel = Path(read_card(model)["training_data"][0]["path"])
@@ -170,6 +174,7 @@ def _dataset_path(model: str) -> Path:
 def _verify(cal: Any, model: str) -> dict[str, Any]:
     """FE solve at the posterior mean for every measured frequency; FE, surrogate and measured
     amplitude at each point."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from fem import simulate
     from fem.results import magnitude
     from fem.scene import scene_from_dict

@@ -50,6 +50,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Ingest a table or a profile, then print what was added."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.data.ingest import (
         ingest_profile,
         ingest_table,

@@ -23,6 +23,7 @@ EXIT_VERIFY_FAILED = 3  # --verify: the FE solve refutes the plan
 
 def top_k(text: str) -> int:
     """argparse type of ``--verify-top``: an integer in [1, MAX_TOP]."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from planner.verify import MAX_TOP
 
     try:
@@ -39,6 +40,7 @@ def top_k(text: str) -> int:
 def _dataset_path(model: str) -> Path:
     """The model's training dataset (the card's path, relative to the working directory or
     to the repository holding ``models/NAME``)."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.runtime.card import read_card
 
     card = read_card(model)
@@ -53,6 +55,7 @@ def _dataset_path(model: str) -> Path:
 def fe_solver(plan: Any) -> Any:
     """A function solving one candidate of ``plan`` with the FE (:class:`planner.verify.FeSolve`
     out); raises RuntimeError when a solve fails."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from planner.crosstalk import UnitField
     from planner.verify import FeSolve
     from surrogate.data.store import Store
@@ -79,6 +82,7 @@ def fe_solver(plan: Any) -> Any:
 
 def verify_plan(plan: Any, k: int) -> dict[str, Any]:
     """The ``verify`` block of ``plan`` with its top ``k`` candidates solved by the FE."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from planner.verify import rerank
 
     return rerank(plan, k, fe_solver(plan))

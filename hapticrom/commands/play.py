@@ -49,6 +49,7 @@ _FLAGS = {"max_level": ("--max-level", "max_level", 1.0),
 
 def _user_limits(args: argparse.Namespace) -> list[tuple[str, float, str]]:
     """The user's settings, the limits file's first, then the flags'."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware.limits import USER_KEYS, load_user_limits
 
     out = []
@@ -66,6 +67,7 @@ def _user_limits(args: argparse.Namespace) -> list[tuple[str, float, str]]:
 def _prepare(dev: Any, args: argparse.Namespace, plan: Any, schedule: Any,
              meter: Any) -> None:
     """Integrity, limits, preflight, exposure (raises on a refusal); nothing is sent."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware import PlanFileError
     from hardware.limits import preflight, rating_of, resolve_limits
 
@@ -100,6 +102,7 @@ def _play(kind: Any, dev: Any, args: argparse.Namespace, plan: Any, schedule: An
           meter: Any) -> BaseException | None:
     """Run the session on ``dev``; a refusal or an interruption is recorded on the device and
     returned (the caller decides what is kept); anything else propagates."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware import Heartbeat
     from hardware.device import PlaybackInterrupted
 
@@ -126,6 +129,7 @@ def _live(kind: Any, args: argparse.Namespace, plan: Any, schedule: Any, meter: 
     """Play on a live array (``serial:PORT``): the outcome of :func:`_play`, or the link lost
     while stopping after the pattern (a PlaybackInterrupted too: the pattern had been
     played)."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware import DeviceError, open_device
     from hardware.device import PlaybackInterrupted
     from hardware.playback import playback_report
@@ -150,6 +154,7 @@ def _live(kind: Any, args: argparse.Namespace, plan: Any, schedule: Any, meter: 
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware import ExposureMeter, build_schedule, load_pattern, load_plan, open_device
     from hardware.backends import device_kind
 
@@ -172,6 +177,7 @@ def _run(args: argparse.Namespace) -> int:
     if kind.live:
         record = None
         if args.out:
+            # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
             from hardware.playback import JsonLines
 
             Path(args.out).mkdir(exist_ok=True)
@@ -196,6 +202,7 @@ def _run(args: argparse.Namespace) -> int:
             print(f"wrote {Path(args.out) / name}" + (" (the refusal)" if outcome else ""))
     if outcome is None:
         return 0
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from hardware.device import PlaybackInterrupted
 
     if isinstance(outcome, PlaybackInterrupted):

@@ -48,6 +48,7 @@ def _value(text: str) -> Any:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.runtime import load_predictor
 
     if args.json:

@@ -14,6 +14,7 @@ __all__ = ["register"]
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.refine import refine
 
     def show(info: dict) -> None:

@@ -23,6 +23,7 @@ def register(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the study into ``--out``."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from studies.guo2025 import reproduce
 
     reproduce(args.out, workers=args.workers, quick=args.quick, progress=not args.quiet)

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from onnx import TensorProto, helper
 
 __all__ = ["matmul_rate", "median_us", "one_add_graph", "timed"]
 
@@ -37,8 +38,6 @@ def timed(fn: Callable[[], Any], repeat: int) -> tuple[Any, float]:
 def one_add_graph(n_features: int) -> bytes:
     """ONNX bytes of y = x + x on a float32 (batch, n_features) input: the floor of any
     onnxruntime call on this machine."""
-    from onnx import TensorProto, helper
-
     io = [helper.make_tensor_value_info(n, TensorProto.FLOAT, [None, n_features])
           for n in ("x", "y")]
     graph = helper.make_graph([helper.make_node("Add", ["x", "x"], ["y"])], "floor", [io[0]],

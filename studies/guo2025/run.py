@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import signal
 
 from fem import simulate
 from fem.scene import scene_from_dict, scene_hash
@@ -57,8 +58,6 @@ def _transient_summary(res) -> dict:
     """Peaks over the whole run, over the last two revolutions, and over the last two
     revolutions after the paper's 40-200 Hz band-pass (um); the centre's mean displacement over
     the last revolution (a rigid drift); the centre and edge histories (um, every step)."""
-    from scipy import signal
-
     h = res.histories
     n = res.r_mm.size
     whole = h.amplitude()

@@ -43,6 +43,7 @@ class DaskBackend:
     name = "dask"
 
     def __init__(self, scheduler: Any) -> None:
+        # optional (the `datasets` extra): only the Dask backend needs it
         from distributed import Client
 
         self.own = isinstance(scheduler, str)
@@ -59,6 +60,7 @@ class DaskBackend:
         return self.client.submit(run_chunk, payload, pure=False)
 
     def wait(self, pending: Sequence[Any], timeout: float) -> set[Any]:
+        # optional (the `datasets` extra): only the Dask backend needs it
         from distributed import wait
 
         try:

@@ -344,6 +344,7 @@ class _DispatchQueue:
 def _execute(store: Store, todo: list[Planned], solver: Mapping[str, Any], backend: Any,
              chunk: int | None, flush_every: int, flush_seconds: float, progress: bool,
              report: GenerateReport, head: dict[Any, list[Planned]] | None = None) -> None:
+    # lazy: a progress bar, drawn only on a terminal
     from tqdm import tqdm
 
     size = _chunk_size(chunk, len(todo), backend.workers)

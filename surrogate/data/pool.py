@@ -125,6 +125,7 @@ def process_map(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None
 
 
 def _progress(total: int, desc: str | None) -> Any:
+    # lazy: a progress bar, drawn only on a terminal
     from tqdm import tqdm
 
     # disable=None: tqdm draws only on a terminal (no bar in logs and pipes)

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import least_squares
 
 import motorlaw
 from surrogate.envelope import card as rom_card
@@ -150,8 +151,6 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: N
                  keep: NDArray, start: NDArray, max_nfev: int, free: Sequence[int]) -> NDArray:
     """Per-run least-squares refinement of the start (nb, 4 or 7; every 4th sample) in its
     parameters ``free`` (column indices; the rest held)."""
-    from scipy.optimize import least_squares
-
     sub = keep & (np.arange(t.size) % 4 == 0)
     out = start.copy()
     free = list(free)
@@ -182,8 +181,6 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
     Without ``learn_gain`` the gain is 1 and its slope 0: the steady level is the harmonic
     model's. With ``modes`` = 2 the per-run one-mode fit starts the second mode
     (:func:`_second_mode_start`), refined per run before the ridge regression."""
-    from scipy.optimize import least_squares
-
     params = params_for(modes)
     weights, report = {}, {}
     ridge = RIDGE * np.eye(features.shape[1])

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.signal import hilbert
 
 import motorlaw
 from surrogate.data.store import Store
@@ -54,8 +55,6 @@ def complex_envelopes(u: NDArray, phi: NDArray) -> NDArray:
     in sine phase with the rotor (u_theta on the theta = 0 meridian) give a spurious envelope
     of 10-15 % of the steady level at t = 0 (measured:
     ``bench/surrogate/transient_rise_check.py``)."""
-    from scipy.signal import hilbert
-
     u = np.asarray(u, dtype=float)
     head = u[:, 1:][:, ::-1]
     tail = np.zeros((u.shape[0], u.shape[1] - 1))
