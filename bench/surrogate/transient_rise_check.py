@@ -38,7 +38,7 @@ PROBE_MS = (5, 10, 15, 20, 25, 30, 40, 50, 60, 80, 100, 120, 140)
 
 
 def crossings(t: np.ndarray, y: np.ndarray, on_s: float) -> tuple[float, float, float]:
-    """(level, t10 ms, t90 ms) of ``y`` read as rom_metrics reads them."""
+    """(level, t10 ms, t90 ms) of ``y`` read as surrogate.envelope.metrics reads them."""
     level = float(np.mean(y[(t >= on_s - STEADY_WINDOW_S) & (t < on_s)]))
     up = t < on_s
     return (level, 1e3 * first_crossing(t[up], y[up], 0.1 * level, rising=True),
