@@ -1,6 +1,7 @@
-"""Draw the package structure as an SVG: one box per package (its lines of code), one arrow
-per package that imports another (every import, functions included), packages placed in the
-layers of the import-linter contract (``pyproject.toml``), the registries marked.
+"""Draw the package structure as an SVG: one box per package (its lines of code, and those of
+each subpackage), one arrow per package that imports another (every import, functions
+included), packages placed in the layers of the import-linter contract (``pyproject.toml``),
+the registries marked.
 
     python bench/structure/draw_structure.py docs/architecture.svg
 
@@ -26,18 +27,24 @@ ROWS = (("hapticrom",), ("hardware",), ("planner", "calibration"), ("studies",),
 REGISTRIES = {"surrogate": "registry: kinds.py (kinds)",
               "hardware": "registry: backends.py (devices)",
               "fieldspec": "errors.py: the two error bases"}
-W, H, GAP_X, GAP_Y, MARGIN = 240, 58, 40, 46, 20
+W, H, GAP_X, GAP_Y, MARGIN = 240, 86, 40, 40, 20
+#: Characters of small text on one line of a box.
+LINE_CHARS = 40
 
 
 def package_graph(root: Path = ROOT) -> tuple[Counter[str], Counter[tuple[str, str]]]:
-    """Lines per package, and (importer, imported) package pairs with their import count."""
+    """Lines per package and per subpackage (``"surrogate/sweep"``), and (importer, imported)
+    package pairs with their import count."""
     lines: Counter[str] = Counter()
     edges: Counter[tuple[str, str]] = Counter()
     packages = {p for row in ROWS for p in row}
     for path in source_files(root):
-        pkg = path.relative_to(root).parts[0]
+        parts = path.relative_to(root).parts
+        pkg = parts[0]
         text = path.read_text(encoding="utf-8")
         lines[pkg] += text.count("\n")
+        if len(parts) > 2:
+            lines[f"{pkg}/{parts[1]}"] += text.count("\n")
         for node in ast.walk(ast.parse(text)):
             if isinstance(node, ast.Import):
                 targets = [a.name.split(".")[0] for a in node.names]
@@ -47,6 +54,20 @@ def package_graph(root: Path = ROOT) -> tuple[Counter[str], Counter[tuple[str, s
                 continue
             edges.update((pkg, t) for t in targets if t in packages and t != pkg)
     return lines, edges
+
+
+def _subpackage_lines(lines: Counter[str], pkg: str) -> list[str]:
+    """The subpackages of ``pkg`` with their lines, largest first, wrapped into box lines."""
+    subs = sorted(((n, k.split("/", 1)[1]) for k, n in lines.items()
+                   if k.startswith(f"{pkg}/")), reverse=True)
+    words = [f"{name}/ {n / 1000:.1f}k" for n, name in subs]
+    rows: list[str] = []
+    for word in words:
+        if rows and len(rows[-1]) + 2 + len(word) <= LINE_CHARS:
+            rows[-1] += f", {word}"
+        else:
+            rows.append(word)
+    return rows
 
 
 def svg(lines: Counter[str], edges: Counter[tuple[str, str]]) -> str:
@@ -92,9 +113,15 @@ def svg(lines: Counter[str], edges: Counter[tuple[str, str]]) -> str:
                    f'font-weight="bold">{pkg}/</text>')
         out.append(f'<text x="{x + W - 10:.0f}" y="{y + 22:.0f}" font-size="11" '
                    f'text-anchor="end" fill="#555">{lines[pkg]:,} lines</text>')
+        text_y = y + 40
         if reg:
-            out.append(f'<text x="{x + 10:.0f}" y="{y + 44:.0f}" font-size="11" '
+            out.append(f'<text x="{x + 10:.0f}" y="{text_y:.0f}" font-size="11" '
                        f'fill="#1a5276">{reg}</text>')
+            text_y += 16
+        for row in _subpackage_lines(lines, pkg):
+            out.append(f'<text x="{x + 10:.0f}" y="{text_y:.0f}" font-size="10" '
+                       f'fill="#555">{row}</text>')
+            text_y += 14
     out.append(f'<text x="{MARGIN}" y="{height - 26}" font-size="11" fill="#555">An arrow '
                'points to what is imported (width: how many imports); blue boxes hold a '
                'registry.</text>')
@@ -112,7 +139,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     lines, edges = package_graph()
     args.out.write_text(svg(lines, edges), encoding="utf-8")
-    print(f"wrote {args.out}: {len(lines)} packages, {len(edges)} package imports")
+    packages = sum("/" not in k for k in lines)
+    print(f"wrote {args.out}: {packages} packages, {len(edges)} package imports")
     return 0
 
 
