@@ -69,5 +69,6 @@ def test_the_tolerance_is_a_scene_field_written_only_when_set():
     loose = scene_from_dict({"analysis": base["analysis"] | {"tolerance": 0.01}})
     assert loose.analysis.tolerance == 0.01
     assert scene_from_dict(scene_to_dict(loose)) == loose
-    with pytest.raises(SceneError, match=r"analysis\.tolerance = 0\.5 is out of range: allowed 1e-6 <= tolerance <= 0\.1"):
+    allowed = r"analysis\.tolerance = 0\.5 is out of range: allowed 1e-6 <= tolerance <= 0\.1"
+    with pytest.raises(SceneError, match=allowed):
         scene_from_dict({"analysis": base["analysis"] | {"tolerance": 0.5}})
