@@ -23,7 +23,7 @@ from .scene import Scene
 from .solve import OperatorLog, solve_mode
 from .sweep_operator import CHEBYSHEV_NODES, SweepOperator
 from .sweep_output import sweep_document, sweep_summary
-from .sweep_rom import KRYLOV_DEPTH, MAX_EXPANSIONS, SWEEP_TOLERANCE, greedy_model
+from .sweep_rom import KRYLOV_DEPTH, MAX_EXPANSIONS, greedy_model
 
 
 @dataclass(frozen=True)
@@ -127,11 +127,13 @@ def setup(scene: Scene, n_nodes: int = CHEBYSHEV_NODES, operator: bool = True) -
 
 
 @linalg.one_blas_thread()
-def sweep(scene: Scene, *, tolerance: float = SWEEP_TOLERANCE,
+def sweep(scene: Scene, *, tolerance: float | None = None,
           max_unknowns: float = DEFAULT_MAX_UNKNOWNS, depth: int = KRYLOV_DEPTH,
           max_expansions: int = MAX_EXPANSIONS) -> SweepResult:
-    """Solve a sweep scene with the reduced-order model (see the module docstring)."""
+    """Solve a sweep scene with the reduced-order model (see the module docstring); the
+    tolerance is the scene's ``analysis.tolerance`` unless given."""
     t0 = time.perf_counter()
+    tolerance = scene.analysis.tolerance if tolerance is None else tolerance
     check_cost(scene, max_unknowns)
     s = setup(scene)
     t_setup = time.perf_counter() - t0

@@ -159,6 +159,25 @@ class ElementGroup:
 
 
 @dataclass(frozen=True)
+class TermGroup:
+    """Terms of the affine form that share one element group, for projecting bases onto
+    them: ``index`` (t,) the term numbers, ``real`` and ``imag`` (t, ne, m, m) the real and
+    imaginary parts of their element matrices (``imag`` None when they are real)."""
+
+    group: ElementGroup
+    index: NDArray
+    real: NDArray
+    imag: NDArray | None
+
+    @classmethod
+    def of(cls, group: ElementGroup, index: list[int], matrices: NDArray) -> TermGroup:
+        imag = np.ascontiguousarray(matrices.imag) if np.iscomplexobj(matrices) else None
+        if imag is not None and not imag.any():
+            imag = None
+        return cls(group, np.asarray(index), np.ascontiguousarray(matrices.real), imag)
+
+
+@dataclass(frozen=True)
 class SweepOperator:
     """A(omega) on one mesh over a band: see the module docstring.
 
@@ -268,6 +287,22 @@ class SweepOperator:
         if self.pml.size:
             Z[self.pml] = np.tensordot(c[2 + len(self.springs):], self.layer.matrices, axes=1)
         return Z
+
+    @cached_property
+    def _term_groups(self) -> tuple[TermGroup, ...]:
+        ns = len(self.springs)
+        stack = np.stack([self.stiffness.matrices, self.mass.matrices])
+        out = [TermGroup.of(self.stiffness, [0, 1], stack)]
+        out += [TermGroup.of(g, [2 + i], g.matrices[None]) for i, g in enumerate(self.springs)]
+        if self.pml.size:
+            out.append(TermGroup.of(self.layer, list(range(2 + ns, self.n_terms)),
+                                    self.layer.matrices))
+        return tuple(out)
+
+    def term_groups(self) -> tuple[TermGroup, ...]:
+        """The terms grouped by the elements they live on (stiffness and mass share one
+        group), with the real and imaginary parts of their matrices (built on first use)."""
+        return self._term_groups
 
     @cached_property
     def condensation(self) -> Condensation:

@@ -29,10 +29,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from .scene.model import Analysis
+from .sweep_basis import GrowingBasis, orthonormalised
 from .sweep_operator import SweepOperator
 
-#: Default tolerance of the estimated relative error of centre, edge and profile.
-SWEEP_TOLERANCE = 1e-3
+#: Default tolerance of the estimated relative error of centre, edge and profile (the scene's).
+SWEEP_TOLERANCE = Analysis.tolerance
 #: Krylov vectors added per expansion point.
 KRYLOV_DEPTH = 8
 #: The difference of successive models estimates the smaller one's error, which is not a strict
@@ -41,50 +43,6 @@ KRYLOV_DEPTH = 8
 ESTIMATE_SAFETY = 2.0
 #: Most factorisations (expansion points) a sweep may spend.
 MAX_EXPANSIONS = 16
-
-
-@dataclass
-class ReducedModel:
-    """Projected operator terms, load and output map of one basis V (n_free, r).
-
-    Attributes:
-        basis: V with orthonormal columns (V^H V = I).
-        reduced: (n_terms, r, r) V^H A_k V.
-        load: (r,) V^H b.
-        outputs: (n_out, 3, r) the output points' (U_r, U_z, U_t) of each basis vector.
-        krylov: coordinates in V of each (normalised) Krylov vector, in the order built.
-        deepest: whether each Krylov vector is the deepest of its expansion point's block.
-    """
-
-    basis: NDArray
-    reduced: NDArray
-    load: NDArray
-    outputs: NDArray
-    krylov: list[NDArray] = field(default_factory=list)
-    deepest: list[bool] = field(default_factory=list)
-
-    def evaluate(self, coefficients: NDArray, subspace: NDArray | None = None) -> NDArray:
-        """Outputs (n_f, n_out, 3) at the frequencies whose term coefficients are the rows of
-        ``coefficients`` (n_f, n_terms), in the whole basis or in the subspace spanned by the
-        orthonormal coordinate columns ``subspace`` (r, s)."""
-        if subspace is None:
-            reduced, load, outputs = self.reduced, self.load, self.outputs
-        else:
-            Q = subspace
-            reduced = np.einsum("ai,kab,bj->kij", Q.conj(), self.reduced, Q)
-            load, outputs = Q.conj().T @ self.load, self.outputs @ Q
-        A = np.tensordot(coefficients, reduced, axes=1)  # (n_f, s, s)
-        y = np.linalg.solve(A, np.broadcast_to(load, (A.shape[0], load.size))[..., None])
-        return np.einsum("ocr,fr->foc", outputs, y[..., 0])
-
-    def without_deepest(self) -> NDArray:
-        """Orthonormal coordinates (r, s) of the span of the Krylov vectors without the deepest
-        one of every expansion point that has more than one."""
-        r = self.basis.shape[1]
-        keep = [np.pad(c, (0, r - c.size)) for c, last in zip(
-            self.krylov, self.deepest, strict=True) if not last]
-        Q, _ = np.linalg.qr(np.column_stack(keep))
-        return Q
 
 
 #: Components smaller than this share of their group's largest are judged against that floor.
@@ -120,24 +78,10 @@ class GreedyReport:
     stages_s: dict[str, float] = field(default_factory=dict)
 
 
-def _orthonormalise(V: NDArray, w: NDArray, drop: float = 1e-8) -> NDArray | None:
-    """``w`` orthogonalised against the orthonormal columns of V (classical Gram-Schmidt
-    twice) and normalised; None when it lies in span(V) to ``drop`` relative."""
-    norm0 = np.linalg.norm(w)
-    if norm0 == 0.0:
-        return None
-    w = w / norm0
-    for _ in range(2):
-        if V.shape[1]:
-            w = w - V @ (V.conj().T @ w)
-    norm = np.linalg.norm(w)
-    return None if norm < drop else w / norm
-
-
 def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArray], NDArray],
                  groups: list[slice], tolerance: float = SWEEP_TOLERANCE,
                  depth: int = KRYLOV_DEPTH, max_expansions: int = MAX_EXPANSIONS
-                 ) -> tuple[ReducedModel, NDArray, NDArray, GreedyReport]:
+                 ) -> tuple[GrowingBasis, NDArray, NDArray, GreedyReport]:
     """Build the reduced model of ``op`` for the angular frequencies ``omegas`` (rad/s).
 
     Args:
@@ -150,75 +94,89 @@ def greedy_model(op: SweepOperator, omegas: NDArray, output_map: Callable[[NDArr
     """
     coef = np.array([op.coefficients(w) for w in omegas])  # (n_f, n_terms)
     report = GreedyReport()
-    V = np.empty((op.dofmap.n_free, 0), dtype=complex)
-    krylov: list[NDArray] = []
-    deepest: list[bool] = []
+    model = GrowingBasis(op, output_map, depth * 4)
+    blocks: list[list[NDArray]] = []
     used = np.zeros(omegas.size, dtype=bool)
     at = omegas.size // 2
     while True:
         used[at] = True
-        V, new = _expand(op, float(omegas[at]), V, depth, report)
-        krylov = [*krylov, *new]
-        deepest = [*deepest, *([False] * (len(new) - 1) + [True] if len(new) > 1
-                               else [False] * len(new))]
+        block = _expand(op, float(omegas[at]), model, depth, report)
+        blocks.append(block)
         t = time.perf_counter()
-        model = ReducedModel(V, op.project(V), V.conj().T @ op.load, output_map(V), krylov,
-                             deepest)
-        t = _lap(report, "projection", t)
         full = model.evaluate(coef)
         estimate = ESTIMATE_SAFETY * output_errors(
-            model.evaluate(coef, model.without_deepest()), full, groups)
+            _without_deepest(model, coef, blocks), full, groups)
         _lap(report, "evaluation", t)
         report.estimates.append(float(estimate.max()))
         # a point already expanded at is exact there; look elsewhere
         candidates = np.where(used, -1.0, estimate)
         if estimate.max() <= tolerance or report.factorisations >= max_expansions \
-                or not new or candidates.max() < 0:
+                or not block or candidates.max() < 0:
             break
         at = int(np.argmax(candidates))
     worst = int(np.argmax(estimate))
-    report.residual = _residual(model, op, coef[worst])
+    report.residual = model.residual(coef[worst])
     report.residual_hz = float(omegas[worst] / (2 * np.pi))
     return model, full, estimate, report
 
 
-def _expand(op: SweepOperator, omega_e: float, V: NDArray, depth: int,
-            report: GreedyReport) -> tuple[NDArray, list[NDArray]]:
-    """Factorise A(omega_e) and add up to ``depth`` Krylov vectors to V: Arnoldi within the
-    block (its span is this point's Krylov space); each vector then joins the global basis and
-    its coordinates there are returned (for the estimate)."""
+def _factorise(op: SweepOperator, omega_e: float, report: GreedyReport):
+    """A factorisation of A(omega_e) and the solution x = A^-1 b."""
     t = time.perf_counter()
     solver = op.solver(omega_e)
     report.factorisations += 1
     report.expansions_hz.append(omega_e / (2 * np.pi))
     t = _lap(report, "factorisation", t)
+    x = solver.solve(op.load)
+    report.back_solves += 1
+    _lap(report, "basis", t)
+    return solver, x
+
+
+def _without_deepest(model: GrowingBasis, coef: NDArray,
+                     blocks: list[list[NDArray]]) -> NDArray:
+    """Outputs (n_f, n_out, 3) of the model on the span of its Krylov vectors without the
+    deepest one of every block that has more than one; ``blocks`` holds the coordinates in
+    the basis of each block's (block-orthonormal) Krylov vectors."""
+    r = model.size
+    keep = [np.pad(c, (0, r - c.size)) for b in blocks for c in (b[:-1] if len(b) > 1 else b)]
+    Q, _ = np.linalg.qr(np.column_stack(keep))
+    sub = np.einsum("ai,kab,bj->kij", Q.conj(), model.reduced, Q)
+    A = np.tensordot(coef, sub, axes=1)
+    b = np.broadcast_to(Q.conj().T @ model.load, (A.shape[0], Q.shape[1]))[..., None]
+    y = np.linalg.solve(A, b)[..., 0]
+    return np.einsum("ocr,fr->foc", model.outputs @ Q, y)
+
+
+def _expand(op: SweepOperator, omega_e: float, model: GrowingBasis, depth: int,
+            report: GreedyReport) -> list[NDArray]:
+    """Factorise A(omega_e) and append up to ``depth`` Krylov vectors x_0 = A^-1 b,
+    x_k = A^-1 A' x_(k-1) (Arnoldi within the block) to the model, projected as one block.
+    Returns the coordinates in the basis of the block's Krylov vectors (for the estimate)."""
+    solver, w = _factorise(op, omega_e, report)
+    t = time.perf_counter()
     slope = op.combined(op.coefficients(omega_e, derivative=True))  # dA/domega
-    block = np.empty((V.shape[0], 0), dtype=complex)
-    coords: list[NDArray] = []
-    w = solver.solve(op.load)
+    block: list[NDArray] = []  # the block's Krylov vectors, orthonormal among themselves
+    new: list[NDArray] = []  # the same, orthogonalised against the basis
     for k in range(depth):
-        qb = _orthonormalise(block, w)
-        q = None if qb is None else _orthonormalise(V, qb)
+        qb = orthonormalised(w, [np.column_stack(block)] if block else [])
+        q = None if qb is None else model.orthogonal_part(qb, new)
         if q is None:
             break
-        block = np.column_stack([block, qb])
-        V = np.column_stack([V, q])
-        coords.append(V.conj().T @ qb)
-        report.back_solves += 1
+        block.append(qb)
+        new.append(q)
         if k < depth - 1:
             w = solver.solve(op.apply(slope, qb))
-    _lap(report, "basis", t)
-    return V, coords
+            report.back_solves += 1
+            t = _lap(report, "basis", t)
+    model.append(new)
+    _lap(report, "projection", t)
+    V = model.basis
+    coords = [(qb.conj() @ V).conj() for qb in block]
+    return coords
 
 
 def _lap(report: GreedyReport, stage: str, t0: float) -> float:
     now = time.perf_counter()
     report.stages_s[stage] = report.stages_s.get(stage, 0.0) + now - t0
     return now
-
-
-def _residual(model: ReducedModel, op: SweepOperator, coef: NDArray) -> float:
-    """||A(omega) V y - b|| / ||b|| of the full operator at one frequency."""
-    y = np.linalg.solve(np.tensordot(coef, model.reduced, axes=1), model.load)
-    r = op.apply(coef, model.basis @ y) - op.load
-    return float(np.linalg.norm(r) / np.linalg.norm(op.load))

@@ -125,8 +125,10 @@ def scene_to_dict(scene: Scene) -> dict[str, dict[str, Any]]:
         table = _table_to_dict(obj, specs)
         if name == "analysis" and obj.kind == "sweep":  # the band, as read
             table["frequency_hz"] = [float(f) for f in obj.frequencies_hz]
-        if name == "analysis" and obj.damping == Analysis.damping:  # default: not written
-            del table["damping"]
+        if name == "analysis":  # defaults not written: scenes from before keep their hash
+            for key in ("damping", "tolerance"):
+                if getattr(obj, key) == getattr(Analysis, key):
+                    del table[key]
         if name in ("effects", "mesh"):  # auto effects, absent cell counts: TOML has no null
             table = {key: value for key, value in table.items() if value is not None}
             if not table:

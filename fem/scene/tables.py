@@ -151,6 +151,7 @@ _TABLE_SPECS: dict[str, tuple[type, dict[str, Spec]]] = {
         "rho_inf": Spec(float, MODEL, "[0, 1]"),
         "voltage_schedule": Spec(Schedule, MODEL, "[-50, 50]", reader=read_schedule),
         "damping": Spec(str, MODEL, choices=("viscous_at_drive", "hysteretic_band")),
+        "tolerance": Spec(float, MODEL, "[1e-6, 0.1]"),
     }),
     "mesh": (MeshSettings, {
         "near_size_mm": Spec(float, MODEL, "(0, 100]"),

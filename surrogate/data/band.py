@@ -6,6 +6,7 @@
     start = 100.0     # Hz
     stop = 250.0      # Hz (included when it lies on the grid)
     step = 2.0        # Hz
+    tolerance = 0.01  # optional: the sweep's error tolerance (default: the scene's, 1e-3)
 
 Every design point of such a space becomes one sweep scene (``analysis.kind = "sweep"``,
 ``analysis.frequency_hz = {start, stop, step}``) and one dataset row holding the complex
@@ -31,9 +32,10 @@ _BAND = {
     "start": Spec(float, REQUIRED, "(0, 1e5]"),
     "stop": Spec(float, REQUIRED, "(0, 1e5]"),
     "step": Spec(float, REQUIRED, "(0, 1e5]"),
+    "tolerance": Spec(float, None, "[1e-6, 0.1]"),
 }
 #: Scene fields the band owns.
-BAND_PATHS = ("analysis.frequency_hz", "analysis.kind")
+BAND_PATHS = ("analysis.frequency_hz", "analysis.kind", "analysis.tolerance")
 
 
 @dataclass(frozen=True)
@@ -43,6 +45,7 @@ class Band:
     start: float
     stop: float
     step: float
+    tolerance: float | None = None  # the sweep's relative error tolerance; None: the scene's
 
     @property
     def frequencies_hz(self) -> tuple[float, ...]:
@@ -51,14 +54,17 @@ class Band:
         return tuple(round(self.start + self.step * i, 9) for i in range(n))
 
     def to_dict(self) -> dict[str, float]:
-        """The ``[band]`` table."""
-        return {"start": self.start, "stop": self.stop, "step": self.step}
+        """The ``[band]`` table (``tolerance`` only when set: older space hashes hold)."""
+        out = {"start": self.start, "stop": self.stop, "step": self.step}
+        return out if self.tolerance is None else out | {"tolerance": self.tolerance}
 
     def apply(self, scene: dict[str, Any]) -> None:
         """Make ``scene`` (a TOML-shaped dict) a sweep over this band, in place."""
         analysis = scene.setdefault("analysis", {})
         analysis["kind"] = "sweep"
-        analysis["frequency_hz"] = self.to_dict()
+        analysis["frequency_hz"] = {"start": self.start, "stop": self.stop, "step": self.step}
+        if self.tolerance is not None:
+            analysis["tolerance"] = self.tolerance
 
 
 def read_band(raw: Any) -> Band:
@@ -77,7 +83,8 @@ def read_band(raw: Any) -> Band:
                          f"frequencies per row: allowed step >= "
                          f"{(got['stop'] - got['start']) / (MAX_BAND_FREQUENCIES - 1):.4g} Hz "
                          f"(at most {MAX_BAND_FREQUENCIES})")
-    return Band(start=got["start"], stop=got["stop"], step=got["step"])
+    return Band(start=got["start"], stop=got["stop"], step=got["step"],
+                tolerance=got.get("tolerance"))
 
 
 def check_band_parameters(parameters: Any) -> None:
