@@ -1,11 +1,11 @@
 """Dataset generation throughput: samples per minute on 1 and 2 worker processes.
 
-    python bench/bench_generate.py                       # default space, default mesh
-    python bench/bench_generate.py --n 64 --coarse       # coarse mesh: runner overhead regime
-    python bench/bench_generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
-    python bench/bench_generate.py --n 256 --compare --repeats 2   # topology grouping on/off
-    python bench/bench_generate.py --n 256 --mesh-topology per_design   # one mesh per design
-    python bench/bench_generate.py --sweep-space --workers 2             # sweeps side by side
+    python bench/datasets/generate.py                       # default space, default mesh
+    python bench/datasets/generate.py --n 64 --coarse       # coarse mesh: runner overhead regime
+    python bench/datasets/generate.py --workers 1 2 4 --space datasets/spaces/transient.toml
+    python bench/datasets/generate.py --n 256 --compare --repeats 2   # topology grouping on/off
+    python bench/datasets/generate.py --n 256 --mesh-topology per_design   # one mesh per design
+    python bench/datasets/generate.py --sweep-space --workers 2             # sweeps side by side
 
 Each run generates ``--n`` samples of the space into a fresh temporary dataset through the
 public ``surrogate.data.generate.generate`` (process pool, Parquet parts, manifest: the real path).
@@ -36,7 +36,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 COARSE_MESH = {"near_size_mm": 1.0, "far_size_mm": 4.0, "order": 1}

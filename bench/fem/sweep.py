@@ -1,7 +1,7 @@
 """What a frequency sweep costs against direct solves on the same mesh, side by side in one run.
 
-    python bench/bench_sweep.py                      # the default forearm unit, 100-250 Hz
-    python bench/bench_sweep.py --scene examples/unit-sweep.toml --repeat 5
+    python bench/fem/sweep.py                      # the default forearm unit, 100-250 Hz
+    python bench/fem/sweep.py --scene examples/unit-sweep.toml --repeat 5
 
 For the scene (a harmonic or sweep scene, turned into a sweep of ``--start``-``--stop`` Hz at
 ``--step`` Hz on one mesh sized for the band):
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from fem.scene import load_scene, scene_from_dict  # noqa: E402
