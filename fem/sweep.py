@@ -148,7 +148,7 @@ def sweep(scene: Scene, *, tolerance: float | None = None,
         "estimates": report.estimates, "back_solves": report.back_solves,
         "basis_size": int(model.basis.shape[1]), "chebyshev_nodes": int(
             s.operator.nodes_t.size), "residual": report.residual,
-        "residual_hz": report.residual_hz,
+        "residual_hz": report.residual_hz, "worst_index": int(np.argmax(estimate)),
         "stages_s": {"setup": t_setup, **report.stages_s,
                      "output": wall - t_setup - t_model},
     }
