@@ -42,7 +42,9 @@ class GrowingBasis:
         self._reduced = np.zeros((op.n_terms, capacity, capacity), dtype=complex)
         self._load = np.zeros(capacity, dtype=complex)
         self._outputs: NDArray | None = None
-        self._local = [np.zeros((*t.group.dofs.shape, capacity), dtype=complex)
+        # per term group, the conjugated element values of the basis, a row per column
+        # (r, ne m): the leading rows of the first r columns are one contiguous block
+        self._local = [np.zeros((capacity, t.group.dofs.size), dtype=complex)
                        for t in op.term_groups()]
         self.size = 0
 
@@ -85,8 +87,9 @@ class GrowingBasis:
         self._V[:, old:new] = np.column_stack(columns)
         Vn = self._V[:, old:new]
         for terms, local in zip(self.op.term_groups(), self._local, strict=True):
-            local[..., old:new] = terms.group.local(Vn)
-            self._project_new(terms, local[..., :new], old)
+            values = terms.group.local(Vn)  # (ne, m, k)
+            local[old:new] = values.reshape(-1, new - old).T.conj()
+            self._project_new(terms, values, local[:new], old)
         self._load[old:new] = Vn.conj().T @ self.op.load
         out = self.output_map(Vn)
         if self._outputs is None:
@@ -94,29 +97,28 @@ class GrowingBasis:
         self._outputs[..., old:new] = out
         self.size = new
 
-    def _project_new(self, terms: TermGroup, local: NDArray, old: int) -> None:
+    def _project_new(self, terms: TermGroup, values: NDArray, local: NDArray,
+                     old: int) -> None:
         """Add the new rows and columns (index >= ``old``) of V^H A_k V for the terms of one
-        group, ``local`` (ne, m, r) its element values of the basis.
+        group: ``values`` (ne, m, k) the new columns' element values, ``local`` (r, ne m)
+        the conjugated element values of every column.
 
         Every element matrix is complex symmetric (Z^T = Z), so the new rows follow from the
         products with the new columns alone: V_new^H Z V_old = (V_old^T Z conj(V_new))^T, and
         with Z = Zr + i Zi, P = Zr V_new and Q = Zi V_new give both Z V_new = P + i Q and
         Z conj(V_new) = conj(P - i Q) for the price of one complex product."""
-        new_local = local[..., old:]
-        ne, m, k = new_local.shape
-        r = local.shape[-1]
-        P = _real_product(terms.real, new_local)  # (t, ne, m, k)
-        Q = None if terms.imag is None else _real_product(terms.imag, new_local)
-        ZV = P if Q is None else P + 1j * Q
-        t = ZV.shape[0]
-        flat = local.reshape(ne * m, r)
-        # one product for all terms of the group: (r, ne m) x (ne m, t k)
-        cols = flat.conj().T @ _by_term(ZV)
-        self._reduced[terms.index, :r, old:r] = np.moveaxis(cols.reshape(r, t, k), 1, 0)
-        if old:
-            ZVc = _by_term((P if Q is None else P - 1j * Q).conj())
-            rows = (flat[:, :old].T @ ZVc).reshape(old, t, k)  # V_old^T Z conj(V_new)
-            self._reduced[terms.index, old:r, :old] = np.moveaxis(rows, (0, 1, 2), (2, 0, 1))
+        ne, m, k = values.shape
+        r = local.shape[0]
+        P = _real_product(terms.real, values)  # (t, ne, m, k)
+        Q = None if terms.imag is None else _real_product(terms.imag, values)
+        for j, term in enumerate(terms.index):
+            Pj = P[j].reshape(ne * m, k)
+            ZV = Pj if Q is None else Pj + 1j * Q[j].reshape(ne * m, k)
+            self._reduced[term, :r, old:r] = local @ ZV  # V^H Z V_new
+            if old:
+                Zc = ZV if Q is None else Pj - 1j * Q[j].reshape(ne * m, k)
+                # V_old^T Z conj(V_new) = conj(V_old^H (Zr - i Zi) V_new)
+                self._reduced[term, old:r, :old] = (local[:old] @ Zc).conj().T
 
     def _grow(self, needed: int) -> None:
         cap = max(needed, 2 * self.capacity)
@@ -131,9 +133,9 @@ class GrowingBasis:
             out = np.zeros((*self._outputs.shape[:2], cap), dtype=complex)
             out[..., : self.size] = self.outputs
             self._outputs = out
-        self._local = [np.concatenate([loc[..., : self.size],
-                                       np.zeros((*loc.shape[:2], cap - self.size),
-                                                dtype=complex)], axis=-1)
+        self._local = [np.concatenate([loc[: self.size],
+                                       np.zeros((cap - self.size, loc.shape[1]),
+                                                dtype=complex)])
                        for loc in self._local]
 
     def solve(self, coefficients: NDArray, size: int | None = None) -> NDArray:
@@ -172,12 +174,6 @@ def orthonormalised(w: NDArray, bases: list[NDArray]) -> NDArray | None:
                 w = w - V @ (w.conj() @ V).conj()
     norm = np.linalg.norm(w)
     return None if norm < DEPENDENT else w / norm
-
-
-def _by_term(ZV: NDArray) -> NDArray:
-    """(t, ne, m, k) products -> (ne m, t k), the terms side by side."""
-    t, ne, m, k = ZV.shape
-    return np.moveaxis(ZV, 0, 2).reshape(ne * m, t * k)
 
 
 def _real_product(Z: NDArray, X: NDArray) -> NDArray:
