@@ -108,6 +108,19 @@ def _scene_text(outcome: Any) -> str:
     return dump_scene_toml(scene_from_dict(scene))
 
 
+def _check_out_dir(out: Path, overwrite: bool) -> None:
+    """``--out-dir``: a directory to be made in an existing one, or one whose output files
+    may be written (checked before any work starts)."""
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out-dir {out}: exists and is not a directory")
+    if not out.exists():
+        if not out.resolve().parent.is_dir():
+            raise ValueError(f"--out-dir {out}: the directory {out.parent} does not exist")
+        return
+    for key, name in OUTPUTS.items():
+        check_output_file(f"--out-dir ({key})", str(out / name), overwrite)
+
+
 def _write(path: Path, text: str) -> None:
     with atomic_path(path) as tmp:
         tmp.write_text(text)
@@ -119,8 +132,7 @@ def _run(args: argparse.Namespace) -> int:
 
     out = Path(args.out_dir) if args.out_dir else None
     if out is not None:
-        for key, name in OUTPUTS.items():
-            check_output_file(f"--out-dir ({key})", str(out / name), args.overwrite)
+        _check_out_dir(out, args.overwrite)
     request = load_design_request(args.request)
     tissue = None
     if args.tissue:

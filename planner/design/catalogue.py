@@ -82,7 +82,7 @@ def ring_inputs(rings: Sequence[Silicone], unused_E_kPa: float) -> dict[str, flo
     shared = rings or read_catalogue()[:1]
     out = {f"ring_{k + 1}_E_kPa": (rings[k].E_kPa if k < len(rings) else unused_E_kPa)
            for k in range(RING_SLOTS)}
-    out.update(ring_density_kg_m3=sum(s.density_kg_m3 for s in shared) / len(shared),
-               ring_nu=sum(s.nu for s in shared) / len(shared),
-               ring_loss_factor=sum(s.loss_factor for s in shared) / len(shared))
+    for name, attr in (("ring_density_kg_m3", "density_kg_m3"), ("ring_nu", "nu"),
+                       ("ring_loss_factor", "loss_factor")):
+        out[name] = round(sum(getattr(s, attr) for s in shared) / len(shared), 6)
     return out

@@ -181,12 +181,18 @@ def _layout(d: dict[str, Any]) -> tuple[LayoutRequest, float | None, dict[str, A
 def design_request_from_dict(d: Any, base_dir: str | Path = ".") -> DesignRequest:
     """Validate a TOML-shaped mapping (reference scenes relative to ``base_dir``); raises
     :class:`DesignRequestError` (a LayoutError) naming the field."""
+    try:
+        return _read(d, base_dir)
+    except DesignRequestError:
+        raise
+    except LayoutError as err:  # the layout's tables, the catalogue, a reference scene
+        raise DesignRequestError(err.field, str(err)) from None
+
+
+def _read(d: Any, base_dir: str | Path) -> DesignRequest:
     ctx = Context(DesignRequestError)
     require_table(d, "", _TABLES, ctx, what="the design request")
-    try:
-        layout, band, raw = _layout(d)
-    except LayoutError as err:
-        raise DesignRequestError(err.field, str(err)) from None
+    layout, band, raw = _layout(d)
     space = read_table(d.get("space", {}), _SPACE, "space", ctx)
     search = read_table(d.get("search", {}), _SEARCH, "search", ctx)
     verify = read_table(d.get("verify", {}), _VERIFY, "verify", ctx)

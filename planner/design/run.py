@@ -31,7 +31,7 @@ from planner.layout import LayoutError, LayoutRequest, short_repr
 from planner.optimise import Plan
 from surrogate.runtime import load_predictor
 
-__all__ = ["DesignOutcome", "band_frequencies", "design", "pareto_front"]
+__all__ = ["DesignOutcome", "band_frequencies", "design", "model_domain", "pareto_front"]
 
 FINALISTS_WITH_TISSUE = 5  # designs re-ranked over the posterior draws
 
@@ -87,7 +87,7 @@ def pareto_front(evaluations: list[Evaluation]) -> list[int]:
     return front
 
 
-def _model_domain(layout: LayoutRequest) -> Any:
+def model_domain(layout: LayoutRequest) -> Any:
     try:
         predictor = load_predictor(layout.model)
     except (OSError, ValueError) as err:
@@ -108,7 +108,7 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
         from planner.tissue import apply_tissue
 
         layout = apply_tissue(layout, tissue)
-    space = DesignSpace(req.space, _model_domain(layout))
+    space = DesignSpace(req.space, model_domain(layout))
     ev = Evaluator(layout, space.key, space.describe, space.materials, req.search.perceptible)
     refs = ev.judge([p.inputs for p in req.references], 0, [p.name for p in req.references],
                     [p.materials for p in req.references]) if req.references else []

@@ -1,9 +1,10 @@
 """The search: a well-kept optimiser for mixed spaces walks the design space
 (:class:`planner.design.space.DesignSpace`) and asks the evaluator for batches of designs.
 
-* ``tpe``: Optuna's tree-structured Parzen estimator (multivariate, grouped, so the ring
-  entries a ring count does not use are not sampled: a conditional space), asked a batch of
-  trials at a time with the constant liar (Bergstra et al. 2011; Optuna, Akiba et al. 2019);
+* ``tpe``: Optuna's tree-structured Parzen estimator, define-by-run so the ring entries a
+  ring count does not use are not sampled (a conditional space), asked a batch of trials at a
+  time with the constant liar (Bergstra et al. 2011; Optuna, Akiba et al. 2019); its
+  multivariate, grouped form took about 60 ms per trial here (bench/bench_design.py);
 * ``cmaes``: CMA-ES of the ``cma`` package (Hansen) with its integer handling, restarted with
   the next seed when it stops early;
 * ``de``: scipy's differential evolution with ``integrality`` (one vectorised call per
@@ -75,10 +76,9 @@ def _tpe(w: _Walk, batch: int, seed: int) -> None:
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    with warnings.catch_warnings():  # multivariate / group / constant_liar are "experimental"
+    with warnings.catch_warnings():  # constant_liar is "experimental"
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True, group=True,
-                                             constant_liar=True,
+        sampler = optuna.samplers.TPESampler(seed=seed, constant_liar=True,
                                              n_startup_trials=max(10, w.budget // 10))
     study = optuna.create_study(direction="minimize", sampler=sampler)
     dims = [d for d, f in zip(w.space.dimensions, w.free, strict=True) if f]
