@@ -5,12 +5,21 @@ the designs as ``[[design]]`` tables; timing off) planned by :func:`planner.opti
 one batched prediction of every design at every drive frequency, then the plan's own checks
 (validity domain, the motor's reach), its bisection and its criterion at the model's 95 %
 bounds (``criterion.holds_at``). Of each design the best frequency is kept: the smallest
-pitch among the frequencies at which it is *perceptible* (``planner.design.request``); ties go
-to the larger own amplitude, as the plan ranks.
+pitch among the frequencies at which it is *perceptible* (``planner.design.request``) and
+*playable*; ties go to the larger own amplitude, as the plan ranks.
 
-The optimisers minimise the *score*: the pitch [mm] of a feasible, perceptible design; else
-a penalty above any pitch, ``2 max_pitch_mm`` plus, for a design felt at no frequency, its
-shortfall below the threshold [dB], so a search is led towards felt designs.
+Playable, as the plan's winner must be: its envelope timing can be computed
+(:func:`planner.timing.plan_timing` on the request's ``[timing]``; a unit on frictionless
+pogo pins with no ring is refused there: nothing holds it sideways). The timing costs about
+0.2 s, so it is computed only for a candidate that would beat the best playable score so far
+(the incumbent); a design that cannot beat it is not the winner whatever its timing
+(``playable`` None: not checked). :meth:`Evaluator.recheck` checks a design fully (the
+finalists, before the FE check).
+
+The optimisers minimise the *score*: the pitch [mm] of a feasible, perceptible, playable
+design; else a penalty above any pitch, ``2 max_pitch_mm`` (+1 when only the timing failed)
+plus, for a design felt at no frequency, its shortfall below the threshold [dB], so a search
+is led towards felt designs.
 """
 
 from __future__ import annotations
@@ -23,6 +32,7 @@ from typing import Any
 
 from planner.layout import LayoutRequest, TimingSpec
 from planner.optimise import DesignResult, Plan, plan_layout
+from planner.prepare import load_rom
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
 
 __all__ = ["Evaluation", "Evaluator", "contact_threshold_um"]
@@ -53,6 +63,8 @@ class Evaluation:
     extrapolated: bool = False
     batch: int = 0  # the batch it was evaluated in
     per_frequency: list[dict[str, Any]] = field(default_factory=list)
+    playable: bool | None = None  # its timing computed (None: not checked, see module doc)
+    unplayable: list[dict[str, Any]] = field(default_factory=list)  # skipped, with why
 
     @property
     def feasible(self) -> bool:
@@ -69,7 +81,7 @@ class Evaluation:
                 "center_low_um": r(self.center_low_um), "threshold_um": r(self.threshold_um),
                 "edge_radius_mm": r(self.edge_radius_mm), "perceptible": self.perceptible,
                 "beyond_profile_share": r(self.beyond_profile), "extrapolated": self.extrapolated,
-                "batch": self.batch}
+                "playable": self.playable, "unplayable": self.unplayable, "batch": self.batch}
 
 
 def contact_threshold_um(curve: ThresholdCurve, frequency_hz: float,
@@ -99,6 +111,11 @@ class Evaluator:
         self.wall_s = 0.0
         self.dropped: list[dict[str, Any]] = []
         self.profile_end_mm = 0.0
+        self.timed = layout  # the request with its [timing] (the playability check)
+        self.rom = load_rom(layout) if layout.timing.enabled else None
+        self.incumbent = math.inf  # the best playable score so far
+        self.timing_checks = 0
+        self.timing_wall_s = 0.0
 
     @property
     def unique(self) -> int:
@@ -127,10 +144,37 @@ class Evaluator:
             self.wall_s += time.perf_counter() - t0
         return [self.cache[self.key(x)] for x in batch]
 
+    def recheck(self, ev: Evaluation) -> Evaluation:
+        """``ev`` judged with every candidate's timing checked (same place in the history)."""
+        if ev.playable is not None or not self.layout_timed:
+            return ev
+        new = self.judge([ev.inputs], ev.order, [ev.name], [ev.materials], check_all=True)[0]
+        new.order, new.batch = ev.order, ev.batch
+        self.cache[self.key(ev.inputs)] = new
+        if 0 <= ev.order < len(self.history):
+            self.history[ev.order] = new
+        return new
+
+    @property
+    def layout_timed(self) -> bool:
+        return self.timed.timing.enabled
+
+    def _timing_problem(self, r: DesignResult) -> str | None:
+        """Why ``r`` (a design at a frequency) is not playable, or None."""
+        from planner.timing import plan_timing
+
+        t0 = time.perf_counter()
+        timing = plan_timing(self.timed, r, model=self.rom)
+        self.timing_checks += 1
+        self.timing_wall_s += time.perf_counter() - t0
+        return timing.get("unavailable")
+
     def judge(self, designs: Sequence[dict[str, Any]], first: int,
               names: Sequence[str] | None = None,
-              materials: Sequence[tuple[str, ...] | None] | None = None) -> list[Evaluation]:
-        """Evaluations of ``designs`` (history orders from ``first``), not cached."""
+              materials: Sequence[tuple[str, ...] | None] | None = None,
+              check_all: bool = False) -> list[Evaluation]:
+        """Evaluations of ``designs`` (history orders from ``first``), not cached; every
+        candidate's timing checked with ``check_all`` (else as the module docstring says)."""
         plan = self.plan([{"name": f"#{first + i}", "inputs": x} for i, x in enumerate(designs)])
         self.dropped, self.profile_end_mm = plan.dropped, plan.profile_end_mm
         by_name: dict[str, list[DesignResult]] = {}
@@ -140,15 +184,16 @@ class Evaluator:
         for i, x in enumerate(designs):
             name = names[i] if names is not None else self.describe(x)
             mats = materials[i] if materials is not None else self.materials(x)
-            ev = self.best(by_name.get(f"#{first + i}", []), x, name, mats)
+            ev = self.best(by_name.get(f"#{first + i}", []), x, name, mats,
+                           check_all or names is not None)
             ev.order, ev.batch = (first + i if names is None else -1), self.batches
             out.append(ev)
         return out
 
     def best(self, results: list[DesignResult], inputs: dict[str, Any], name: str,
-             materials: tuple[str, ...] | None) -> Evaluation:
+             materials: tuple[str, ...] | None, check_all: bool = False) -> Evaluation:
         """One design's evaluation from its candidates at every kept frequency."""
-        rows, best, best_key, shortfall_db = [], None, None, math.inf
+        rows, ok, shortfall_db = [], [], math.inf
         for r in results:
             low = r.decision.center_um if r.decision is not None else r.center_um
             level = low * self.layout.criterion.drive_level
@@ -157,20 +202,30 @@ class Evaluator:
             shortfall_db = min(shortfall_db, max(0.0, 20 * math.log10(threshold / level)))
             rows.append({"frequency_hz": r.frequency_hz, "pitch_mm": r.pitch_mm,
                          "center_um": round(r.center_um, 4), "perceptible": heard})
-            if r.pitch_mm is None or not (heard or not self.perceptible):
-                continue
-            k = (r.pitch_mm, -low)
-            if best_key is None or k < best_key:
-                best, best_key = (r, low, threshold, heard), k
+            if r.pitch_mm is not None and (heard or not self.perceptible):
+                ok.append(((r.pitch_mm, -low), r, low, threshold, heard))
+        best, playable, skipped = None, None, []
+        for _, r, low, threshold, heard in sorted(ok, key=lambda x: x[0]):
+            if not self.layout_timed or not (check_all or r.pitch_mm < self.incumbent):
+                best = (r, low, threshold, heard)
+                break
+            why = self._timing_problem(r)
+            if why is None:
+                best, playable = (r, low, threshold, heard), True
+                self.incumbent = min(self.incumbent, r.pitch_mm)
+                break
+            skipped.append({"frequency_hz": r.frequency_hz, "reason": why})
         top = 2.0 * self.layout.max_pitch_mm
         if best is None:
-            score = top + (0.0 if not results or not math.isfinite(shortfall_db)
-                           else shortfall_db)
-            ev = Evaluation(-1, name, dict(inputs), materials, score, per_frequency=rows,
-                            edge_radius_mm=results[0].edge_radius_mm if results else 0.0)
-            return ev
+            score = top + (1.0 if skipped else 0.0) + (
+                0.0 if not results or not math.isfinite(shortfall_db) or ok else shortfall_db)
+            return Evaluation(-1, name, dict(inputs), materials, score, per_frequency=rows,
+                              edge_radius_mm=results[0].edge_radius_mm if results else 0.0,
+                              playable=False if skipped else None, unplayable=skipped)
         r, low, threshold, heard = best
         return Evaluation(-1, name, dict(inputs), materials, float(r.pitch_mm), r.frequency_hz,
                           r.pitch_mm, r.pitch_nominal_mm, r.pitch_95_mm, r.center_um, low,
                           threshold, r.edge_radius_mm, heard, r.beyond_profile,
-                          bool(r.extrapolated or r.extrapolations), per_frequency=rows)
+                          bool(r.extrapolated or r.extrapolations), per_frequency=rows,
+                          playable=playable if self.layout_timed else True,
+                          unplayable=skipped)

@@ -7,7 +7,8 @@
 Steps: the request's drive frequencies (or the model's band at ``band_step_hz``, the
 unreachable ones dropped by the plan's own check); the space on the plan's validity domain;
 the reference units evaluated as the searched ones are; the search; the ranking (the score,
-then the larger own amplitude); with a calibrated tissue (``--tissue``), the finalists
+then the larger own amplitude; the first few with their timing checked, so every finalist is
+playable: ``planner.design.evaluate``); with a calibrated tissue (``--tissue``), the finalists
 re-ranked on their pitch over the person's posterior draws (:func:`planner.tissue.
 posterior_pitch`: the pitch that holds at the posterior's 95 % bound, judged at the
 criterion's basis); and the winner planned with timing, as ``hapticrom plan`` would, so the
@@ -114,9 +115,9 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
                     [p.materials for p in req.references]) if req.references else []
     s = req.search
     stats = run_search(space, ev, s.optimiser, s.budget, s.batch, s.seed)
-    ranking = sorted((e for e in ev.history if e.feasible and
-                      (e.perceptible or not s.perceptible)),
-                     key=lambda e: (e.score, -e.center_low_um, e.order))
+    need = max(req.verify_top, FINALISTS_WITH_TISSUE if tissue is not None else 1)
+    ranking = _checked_ranking(ev, s.perceptible, need)
+    stats.update(timing_checks=ev.timing_checks, timing_wall_s=round(ev.timing_wall_s, 3))
     outcome = DesignOutcome(req, layout, space, ev, stats, ranking, refs, None)
     if tissue is not None and ranking:
         _rerank_posterior(outcome, tissue)
@@ -126,6 +127,20 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
         outcome.plan = ev.plan(designs, timing=layout.timing)
     outcome.wall_s = time.perf_counter() - t0
     return outcome
+
+
+def _checked_ranking(ev: Evaluator, perceptible: bool, need: int) -> list[Evaluation]:
+    """The feasible, felt designs not known to be unplayable, best first, the first ``need``
+    of them with their timing checked (:meth:`Evaluator.recheck`)."""
+    while True:
+        ranking = sorted((e for e in ev.history if e.feasible and e.playable is not False
+                          and (e.perceptible or not perceptible)),
+                         key=lambda e: (e.score, -e.center_low_um, e.order))
+        unchecked = [e for e in ranking[:need] if e.playable is None]
+        if not unchecked:
+            return ranking
+        for e in unchecked:
+            ev.recheck(e)
 
 
 def _rerank_posterior(outcome: DesignOutcome, tissue: Any) -> None:

@@ -13,8 +13,10 @@
   the others are measured against (bench/bench_design.py).
 
 Entries with a single value (a space narrowed to one orientation, say) are held fixed. Every
-method stops once ``budget`` distinct designs were evaluated (the grid: all of it), or when
-the space is exhausted; each is deterministic for a seed.
+method stops once ``budget`` distinct designs were evaluated (the grid: all of it); a run
+that has converged (:data:`STALL` batches without a new design) is restarted with the next
+seed (cmaes, de; at most :data:`MAX_RESTARTS` times) or ends (tpe). Each is deterministic for
+a seed.
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ from planner.design.space import DesignSpace
 
 __all__ = ["METHODS", "run_search"]
 
-STALL = 25  # batches in a row without a new design: the space is exhausted for the method
+STALL = 25  # batches in a row without a new design: the run has converged (restarted)
+MAX_RESTARTS = 20  # converged runs (cmaes, de) before the space counts as exhausted
 
 Evaluate = Callable[[list[dict[str, Any]]], list[Evaluation]]
 
@@ -46,10 +49,20 @@ class _Walk:
         self.lo, self.hi, self.integer = lo, hi, integer
         self.points = 0
         self.stalled = 0
+        self.restarts = 0
 
     @property
     def done(self) -> bool:
+        """The budget is spent, or the current run has converged."""
         return self.evaluator.unique >= self.budget or self.stalled >= STALL
+
+    def restart(self) -> bool:
+        """Whether to start another run (a converged one restarts with the next seed)."""
+        if self.evaluator.unique >= self.budget or self.restarts >= MAX_RESTARTS:
+            return False
+        self.restarts += 1
+        self.stalled = 0
+        return True
 
     def full(self, z: np.ndarray) -> np.ndarray:
         x = self.lo.copy()
@@ -109,9 +122,8 @@ def _cmaes(w: _Walk, batch: int, seed: int) -> None:
     import cma
 
     lo, hi, integer = w.lo[w.free], w.hi[w.free], w.integer[w.free]
-    restart = 0
-    while not w.done:
-        opts = {"seed": seed + 1 + restart, "bounds": [list(lo - 0.49 * integer),
+    while True:
+        opts = {"seed": seed + 1 + w.restarts, "bounds": [list(lo - 0.49 * integer),
                                                       list(hi + 0.49 * integer)],
                 "CMA_stds": list(0.3 * (hi - lo + integer)), "popsize": max(batch, 4),
                 "integer_variables": [int(i) for i in np.flatnonzero(integer)],
@@ -120,25 +132,26 @@ def _cmaes(w: _Walk, batch: int, seed: int) -> None:
         while not es.stop() and not w.done:
             X = es.ask()
             es.tell(X, list(w.scores(np.array(X))))
-        restart += 1
+        if not w.restart():
+            return
 
 
 def _de(w: _Walk, batch: int, seed: int) -> None:
     from scipy.optimize import differential_evolution
 
     lo, hi, integer = w.lo[w.free], w.hi[w.free], w.integer[w.free]
-    restart = 0
 
     def stop(intermediate_result: Any) -> bool:
         return w.done
 
-    while not w.done:
+    while True:
         differential_evolution(lambda Z: w.scores(np.atleast_2d(Z.T)), list(zip(lo, hi,
                                                                                  strict=True)),
-                               integrality=integer, seed=seed + restart, vectorized=True,
+                               integrality=integer, seed=seed + w.restarts, vectorized=True,
                                updating="deferred", polish=False, maxiter=100_000, tol=0.0,
                                popsize=max(2, -(-batch // max(1, len(lo)))), callback=stop)
-        restart += 1
+        if not w.restart():
+            return
 
 
 METHODS: dict[str, Callable[[_Walk, int, int], None]] = {"tpe": _tpe, "cmaes": _cmaes,
@@ -158,6 +171,7 @@ def run_search(space: DesignSpace, evaluator: Any, optimiser: str, budget: int, 
         METHODS[optimiser](w, batch, seed)
     return {"optimiser": optimiser, "seed": seed, "budget": budget, "batch": batch,
             "points_asked": w.points, "designs_evaluated": evaluator.unique,
-            "batches": evaluator.batches, "exhausted": w.stalled >= STALL,
+            "batches": evaluator.batches, "restarts": w.restarts,
+            "exhausted": w.evaluator.unique < budget and optimiser != "grid",
             "wall_s": round(time.perf_counter() - t0, 3),
             "evaluation_wall_s": round(evaluator.wall_s, 3)}
