@@ -89,6 +89,8 @@ def pareto_front(evaluations: list[Evaluation]) -> list[int]:
 
 
 def model_domain(layout: LayoutRequest) -> Any:
+    """The validity domain of the request's harmonic model (a bad ``model.path`` is a
+    LayoutError naming it)."""
     try:
         predictor = load_predictor(layout.model)
     except (OSError, ValueError) as err:

@@ -69,7 +69,7 @@ def test_layout_file_plans_the_winner_first(outcome):
     from planner.optimise import plan_layout
 
     req = layout_from_dict(tomllib.loads(layout_toml(outcome)))
-    assert [d["name"] for d in req.designs][0] == outcome.winner.name
+    assert next(d["name"] for d in req.designs) == outcome.winner.name
     plan = plan_layout(req)
     assert plan.best.name == outcome.winner.name
     assert plan.best.pitch_mm == pytest.approx(outcome.winner.pitch_mm)

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import pytest
 
-from planner.design.evaluate import Evaluation, Evaluator
+from planner.design.evaluate import Evaluation
 from planner.design.request import design_request_from_dict
 from planner.design.run import design, model_domain, pareto_front
 from planner.design.search import run_search

@@ -50,7 +50,7 @@ def test_fe_check_sweeps_each_unit_once(tiny):
 
 
 def test_fe_of_another_site_refutes(tiny):
-    outcome, req = tiny
+    outcome, _req = tiny
     other = {**outcome.layout.site, "skin_E_kPa": 120.0, "fat_thickness_mm": 4.0}
     v = verify_search(outcome.evaluator, outcome.finalists, (),
                       band_solver(outcome.layout.model, other))
