@@ -114,6 +114,7 @@ class Evaluator:
         self.timed = layout  # the request with its [timing] (the playability check)
         self.rom = load_rom(layout) if layout.timing.enabled else None
         self.incumbent = math.inf  # the best playable score so far
+        self.names: set[str] = set()  # the designs' names so far (each unique)
         self.timing_checks = 0
         self.timing_wall_s = 0.0
 
@@ -182,13 +183,20 @@ class Evaluator:
             by_name.setdefault(c.name, []).append(c)
         out = []
         for i, x in enumerate(designs):
-            name = names[i] if names is not None else self.describe(x)
+            name = names[i] if names is not None else self._unique(self.describe(x), first + i)
             mats = materials[i] if materials is not None else self.materials(x)
             ev = self.best(by_name.get(f"#{first + i}", []), x, name, mats,
                            check_all or names is not None)
             ev.order, ev.batch = (first + i if names is None else -1), self.batches
             out.append(ev)
         return out
+
+    def _unique(self, name: str, order: int) -> str:
+        """``name``, or with ``#order`` when another design already has it (continuous
+        moduli are shown rounded)."""
+        unique = name if name not in self.names else f"{name} #{order}"
+        self.names.add(unique)
+        return unique
 
     def best(self, results: list[DesignResult], inputs: dict[str, Any], name: str,
              materials: tuple[str, ...] | None, check_all: bool = False) -> Evaluation:

@@ -32,9 +32,11 @@ from planner.layout import LayoutError, LayoutRequest, short_repr
 from planner.optimise import Plan
 from surrogate.runtime import load_predictor
 
-__all__ = ["DesignOutcome", "band_frequencies", "design", "model_domain", "pareto_front"]
+__all__ = ["DesignOutcome", "band_frequencies", "design", "distinct", "model_domain",
+           "pareto_front"]
 
 FINALISTS_WITH_TISSUE = 5  # designs re-ranked over the posterior draws
+DISTINCT = 0.1  # finalists differ by more than this share in some number (or a choice)
 
 
 @dataclass
@@ -59,11 +61,30 @@ class DesignOutcome:
 
     @property
     def finalists(self) -> list[Evaluation]:
-        return self.ranking[:self.request.verify_top]
+        """The best ``verify_top`` designs, each distinct from those before it
+        (:func:`distinct`: continuous moduli make near-copies of the winner)."""
+        out: list[Evaluation] = []
+        for e in self.ranking:
+            if len(out) == self.request.verify_top:
+                break
+            if all(distinct(e.inputs, f.inputs) for f in out):
+                out.append(e)
+        return out
 
     @property
     def history(self) -> list[Evaluation]:
         return self.evaluator.history
+
+
+def distinct(a: dict[str, Any], b: dict[str, Any], rel: float = DISTINCT) -> bool:
+    """Whether two designs differ: in a discrete input, or by more than ``rel`` in a number
+    the units use (the catalogue's neighbouring silicones differ by 18 % or more in modulus)."""
+    n = a["n_rings"]
+    if any(a[k] != b[k] for k in ("orientation", "attachment", "n_rings")):
+        return True
+    used = [f"ring_{k}_E_kPa" for k in range(1, n + 1)]
+    used += ["ring_density_kg_m3", "ring_nu", "ring_loss_factor"] if n else []
+    return any(abs(a[k] / b[k] - 1.0) > rel for k in used)
 
 
 def band_frequencies(layout: LayoutRequest, step_hz: float) -> tuple[float, ...]:
@@ -117,11 +138,11 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
                     [p.materials for p in req.references]) if req.references else []
     s = req.search
     stats = run_search(space, ev, s.optimiser, s.budget, s.batch, s.seed)
-    need = max(req.verify_top, FINALISTS_WITH_TISSUE if tissue is not None else 1)
-    ranking = _checked_ranking(ev, s.perceptible, need)
+    outcome = DesignOutcome(req, layout, space, ev, stats, [], refs, None)
+    head = FINALISTS_WITH_TISSUE if tissue is not None else 1
+    _check_finalists(outcome, lambda o: o.ranking[:head] + o.finalists)
     stats.update(timing_checks=ev.timing_checks, timing_wall_s=round(ev.timing_wall_s, 3))
-    outcome = DesignOutcome(req, layout, space, ev, stats, ranking, refs, None)
-    if tissue is not None and ranking:
+    if tissue is not None and outcome.ranking:
         _rerank_posterior(outcome, tissue)
     if outcome.winner is not None:
         designs = [{"name": outcome.winner.name, "inputs": outcome.winner.inputs}]
@@ -131,16 +152,19 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
     return outcome
 
 
-def _checked_ranking(ev: Evaluator, perceptible: bool, need: int) -> list[Evaluation]:
-    """The feasible, felt designs not known to be unplayable, best first, the first ``need``
-    of them with their timing checked (:meth:`Evaluator.recheck`)."""
+def _check_finalists(outcome: DesignOutcome, chosen: Any) -> None:
+    """``outcome.ranking``: the feasible, felt designs not known to be unplayable, best
+    first, those ``chosen(outcome)`` picks (the finalists) with their timing checked
+    (:meth:`Evaluator.recheck`; a design found unplayable leaves the ranking)."""
+    ev, perceptible = outcome.evaluator, outcome.request.search.perceptible
     while True:
-        ranking = sorted((e for e in ev.history if e.feasible and e.playable is not False
-                          and (e.perceptible or not perceptible)),
-                         key=lambda e: (e.score, -e.center_low_um, e.order))
-        unchecked = [e for e in ranking[:need] if e.playable is None]
+        outcome.ranking = sorted((e for e in ev.history if e.feasible and
+                                  e.playable is not False and
+                                  (e.perceptible or not perceptible)),
+                                 key=lambda e: (e.score, -e.center_low_um, e.order))
+        unchecked = [e for e in chosen(outcome) if e.playable is None]
         if not unchecked:
-            return ranking
+            return
         for e in unchecked:
             ev.recheck(e)
 

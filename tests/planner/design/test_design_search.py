@@ -114,3 +114,15 @@ def test_pareto_front_is_non_dominated():
     evs = [Evaluation(i, str(i), {}, None, p, 150.0, p, p, p, c)
            for i, (p, c) in enumerate([(10, 5), (12, 4), (11, 8), (20, 9), (15, 8)])]
     assert pareto_front(evs) == [0, 2, 3]
+
+
+def test_finalists_differ_beyond_near_copies():
+    from planner.design.run import distinct
+
+    a = {"orientation": "reverse", "attachment": "pogo", "n_rings": 1, "ring_1_E_kPa": 95.0,
+         "ring_2_E_kPa": 95.0, "ring_3_E_kPa": 95.0, "ring_density_kg_m3": 1040.0,
+         "ring_nu": 0.49, "ring_loss_factor": 0.1}
+    assert not distinct(a, {**a, "ring_1_E_kPa": 96.0, "ring_2_E_kPa": 500.0})  # ring 2 unused
+    assert distinct(a, {**a, "ring_1_E_kPa": 118.0})  # the catalogue's next silicone
+    assert distinct(a, {**a, "attachment": "glued"})
+    assert distinct(a, {**a, "n_rings": 2})
