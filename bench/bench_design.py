@@ -6,11 +6,11 @@
 The request's space (default: the forearm example's, 6 catalogue silicones, 1036 designs) is
 first evaluated whole (``grid``: every design, the known optimum); then each optimiser runs
 with the budget for every seed, on a fresh evaluator (no cache shared). Per run: distinct
-designs evaluated, wall time (search and the evaluations in it), the best pitch found, its
-rank in the grid (1 = the grid's optimum), and how many evaluations it took to reach the
-grid's optimum (``-`` if it never did). The summary gives each method's median and worst
-(max) over the seeds. The FE check is not part of this bench (``hapticrom design`` times
-it: ``fe_check_wall_s`` in design.json).
+designs evaluated, points the optimiser asked for (repeats included), wall time (search and
+the evaluations in it), the best pitch found, its rank in the grid (1 = the grid's optimum),
+and how many evaluations it took to reach the grid's optimum (``-`` if it never did). The
+summary gives each method's median and worst (max) over the seeds. The FE check is not part
+of this bench (``hapticrom design`` times it: ``fe_check_wall_s`` in design.json).
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ def _run(req, space, method: str, budget: int, seed: int) -> dict:
     wall = time.perf_counter() - t0
     scores = [e.score for e in ev.history]
     return {"method": method, "seed": seed, "unique": ev.unique, "wall_s": wall,
+            "asked": stats["points_asked"],
             "eval_s": stats["evaluation_wall_s"], "best": min(scores), "scores": scores}
 
 
@@ -58,7 +59,7 @@ def main() -> None:
     optimum = ranked[0]
     print(f"space: {req.space.materials}, {grid['unique']} designs; grid: {grid['wall_s']:.1f} s "
           f"({grid['eval_s']:.1f} s evaluating), optimum {optimum:.3f} mm")
-    print(f"{'method':7s} {'seed':>4s} {'designs':>7s} {'wall s':>7s} {'eval s':>7s} "
+    print(f"{'method':7s} {'seed':>4s} {'designs':>7s} {'asked':>6s} {'wall s':>7s} {'eval s':>7s} "
           f"{'best mm':>8s} {'rank':>5s} {'to optimum':>10s}")
     rows: dict[str, list[dict]] = {}
     for method in args.methods:
@@ -68,7 +69,8 @@ def main() -> None:
             hit = [i for i, s in enumerate(r["scores"]) if s <= optimum + 1e-9]
             r["to_optimum"] = hit[0] + 1 if hit else None
             rows.setdefault(method, []).append(r)
-            print(f"{method:7s} {seed:4d} {r['unique']:7d} {r['wall_s']:7.1f} {r['eval_s']:7.1f} "
+            print(f"{method:7s} {seed:4d} {r['unique']:7d} {r['asked']:6d} {r['wall_s']:7.1f} "
+                  f"{r['eval_s']:7.1f} "
                   f"{r['best']:8.3f} {r['rank']:5d} "
                   f"{'-' if r['to_optimum'] is None else r['to_optimum']:>10}")
     print("summary (median / worst over seeds): wall s, rank, evaluations to the optimum")

@@ -3,8 +3,9 @@
 
 * ``tpe``: Optuna's tree-structured Parzen estimator, define-by-run so the ring entries a
   ring count does not use are not sampled (a conditional space), asked a batch of trials at a
-  time with the constant liar (Bergstra et al. 2011; Optuna, Akiba et al. 2019); its
-  multivariate, grouped form took about 60 ms per trial here (bench/bench_design.py);
+  time with the constant liar (Bergstra et al. 2011; Optuna, Akiba et al. 2019); on a
+  discrete space it keeps proposing designs already seen and each ask costs more with every
+  trial, so it stops after :data:`TPE_ASKS` trials per design of the budget;
 * ``cmaes``: CMA-ES of the ``cma`` package (Hansen) with its integer handling, restarted with
   the next seed when it stops early;
 * ``de``: scipy's differential evolution with ``integrality`` (one vectorised call per
@@ -35,6 +36,7 @@ __all__ = ["METHODS", "run_search"]
 
 STALL = 25  # batches in a row without a new design: the run has converged (restarted)
 MAX_RESTARTS = 20  # converged runs (cmaes, de) before the space counts as exhausted
+TPE_ASKS = 10  # tpe: trials asked per design of the budget, at most (its asks cost O(trials))
 
 Evaluate = Callable[[list[dict[str, Any]]], list[Evaluation]]
 
@@ -96,7 +98,7 @@ def _tpe(w: _Walk, batch: int, seed: int) -> None:
     study = optuna.create_study(direction="minimize", sampler=sampler)
     dims = [d for d, f in zip(w.space.dimensions, w.free, strict=True) if f]
     rings = w.space.spec.n_rings
-    while not w.done:
+    while not w.done and w.points < TPE_ASKS * w.budget:
         trials = [study.ask() for _ in range(batch)]
         Z = np.array([_suggest(t, dims, rings) for t in trials])
         for t, s in zip(trials, w.scores(Z), strict=True):
