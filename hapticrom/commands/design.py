@@ -24,9 +24,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from hapticrom.commands.design_verify import band_solver, unit_scene, unit_space
 from hapticrom.commands.plan_verify import EXIT_VERIFY_FAILED
 from hapticrom.outputs import atomic_path, check_output_file
 
@@ -100,10 +102,9 @@ def _print_verify(v: dict[str, Any]) -> None:
 
 def _scene_text(outcome: Any) -> str:
     from fem.scene import dump_scene_toml, scene_from_dict
-    from hapticrom.commands.design_verify import _space, unit_scene
 
     w = outcome.winner
-    scene = unit_scene(_space(outcome.layout.model), outcome.layout.site, w.inputs, w.materials,
+    scene = unit_scene(unit_space(outcome.layout.model), outcome.layout.site, w.inputs, w.materials,
                        {"kind": "harmonic", "frequency_hz": float(w.frequency_hz)})
     return dump_scene_toml(scene_from_dict(scene))
 
@@ -140,14 +141,11 @@ def _run(args: argparse.Namespace) -> int:
 
         tissue = load_tissue(args.tissue)
     if args.verify_top is not None:
-        from dataclasses import replace
-
         request = replace(request, verify_top=args.verify_top)
     outcome = design(request, seed=args.seed, tissue=tissue)
     _print_outcome(outcome)
     verify = None
     if outcome.winner is not None and not args.no_verify:
-        from hapticrom.commands.design_verify import band_solver
         from planner.design.verify import verify_search
 
         try:

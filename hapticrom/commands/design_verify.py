@@ -19,10 +19,11 @@ import numpy as np
 
 from hapticrom.commands.plan_verify import _dataset_path
 
-__all__ = ["band_solver", "unit_scene"]
+__all__ = ["band_solver", "unit_scene", "unit_space"]
 
 
-def _space(model: str) -> Any:
+def unit_space(model: str) -> Any:
+    """The parameter space of the model's training dataset (it builds the scenes)."""
     from surrogate.data.store import Store
 
     return Store.open(_dataset_path(model)).space
@@ -52,7 +53,7 @@ def band_solver(model: str, site: dict[str, Any]) -> Any:
     from planner.crosstalk import UnitField
     from planner.verify import FeSolve
 
-    space = _space(model)
+    space = unit_space(model)
 
     def solve(inputs: dict[str, Any], materials: tuple[str, ...] | None,
               frequencies_hz: tuple[float, ...]) -> list[FeSolve]:

@@ -34,6 +34,7 @@ from planner.layout import LayoutRequest, TimingSpec
 from planner.optimise import DesignResult, Plan, plan_layout
 from planner.prepare import load_rom
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
+from planner.timing import plan_timing
 
 __all__ = ["Evaluation", "Evaluator", "contact_threshold_um"]
 
@@ -162,8 +163,6 @@ class Evaluator:
 
     def _timing_problem(self, r: DesignResult) -> str | None:
         """Why ``r`` (a design at a frequency) is not playable, or None."""
-        from planner.timing import plan_timing
-
         t0 = time.perf_counter()
         timing = plan_timing(self.timed, r, model=self.rom)
         self.timing_checks += 1

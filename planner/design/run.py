@@ -30,6 +30,7 @@ from planner.design.space import DesignSpace
 from planner.domain import build_domain
 from planner.layout import LayoutError, LayoutRequest, short_repr
 from planner.optimise import Plan
+from planner.tissue import apply_tissue, posterior_pitch
 from surrogate.runtime import load_predictor
 
 __all__ = ["DesignOutcome", "band_frequencies", "design", "distinct", "model_domain",
@@ -129,8 +130,6 @@ def design(request: DesignRequest, seed: int | None = None, tissue: Any = None) 
     if req.band_step_hz is not None:
         layout = replace(layout, frequencies_hz=band_frequencies(layout, req.band_step_hz))
     if tissue is not None:
-        from planner.tissue import apply_tissue
-
         layout = apply_tissue(layout, tissue)
     space = DesignSpace(req.space, model_domain(layout))
     ev = Evaluator(layout, space.key, space.describe, space.materials, req.search.perceptible)
@@ -172,8 +171,6 @@ def _check_finalists(outcome: DesignOutcome, chosen: Any) -> None:
 def _rerank_posterior(outcome: DesignOutcome, tissue: Any) -> None:
     """The first finalists ranked on their pitch over the posterior draws (None: infeasible
     for some draw beyond the 95 % bound, ranked last); the others keep their order."""
-    from planner.tissue import posterior_pitch
-
     head = outcome.ranking[:FINALISTS_WITH_TISSUE]
     rows = []
     for e in head:

@@ -31,6 +31,8 @@ LAZY_MODULES = {
     "distributed": "dask, the `datasets` extra: only the Dask backend needs it",
     "tqdm": "progress bars, drawn only on a terminal",
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
+    "optuna": "0.22 s, the `design` extra: only `search.optimiser = \"tpe\"` needs it",
+    "cma": "2.3 s, the `design` extra: only `search.optimiser = \"cmaes\"` needs it",
     "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it (surrogate/lgbm.py)",
 }
 
