@@ -2,22 +2,14 @@
 
 from __future__ import annotations
 
-import copy
-import tomllib
-from pathlib import Path
-
 import pytest
-
-ROOT = Path(__file__).resolve().parents[3]
-EXAMPLE = ROOT / "examples" / "design-forearm.toml"
+from design_requests import example_dict
 
 
 @pytest.fixture
 def request_dict() -> dict:
     """The forearm example's tables (reference scenes made absolute), to be edited."""
-    d = tomllib.loads(EXAMPLE.read_text())
-    d["reference"]["scenes"] = [str(ROOT / "examples" / s) for s in d["reference"]["scenes"]]
-    return copy.deepcopy(d)
+    return example_dict()
 
 
 @pytest.fixture

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from design_requests import example_dict
 
 from planner.design.layout_file import layout_toml
 from planner.design.record import SCHEMA_VERSION, check_design_record, design_record
@@ -15,17 +16,11 @@ from planner.plan_record import PlanRecordError
 
 
 @pytest.fixture(scope="module")
-def outcome(tmp_path_factory):
-    import copy
-    import tomllib
-
-    from conftest import EXAMPLE, ROOT
-
-    d = tomllib.loads(EXAMPLE.read_text())
-    d["reference"]["scenes"] = [str(ROOT / "examples" / s) for s in d["reference"]["scenes"]]
+def outcome():
+    d = example_dict()
     d["space"] = {"catalogue": ["A", "D"], "n_rings": [0, 1, 2]}
     d["search"] = {"budget": 16, "batch": 8}
-    return design(design_request_from_dict(copy.deepcopy(d)), seed=0)
+    return design(design_request_from_dict(d), seed=0)
 
 
 def test_record_round_trip(outcome):

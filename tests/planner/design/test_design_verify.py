@@ -4,6 +4,7 @@ plan --verify's; an FE of another site refutes the winner."""
 from __future__ import annotations
 
 import pytest
+from design_requests import example_dict
 
 from hapticrom.commands.design_verify import band_solver
 from planner.design.request import design_request_from_dict
@@ -12,20 +13,15 @@ from planner.design.verify import verify_search
 
 
 @pytest.fixture(scope="module")
-def tiny(request):
-    import copy
-    import tomllib
-
-    from conftest import EXAMPLE, ROOT
-
-    d = tomllib.loads(EXAMPLE.read_text())
+def tiny():
+    d = example_dict()
     d["drive"] = {"frequencies_hz": [120.0, 150.0]}
     d["space"] = {"orientations": ["reverse"], "attachments": ["pogo"], "n_rings": [1],
                   "catalogue": ["A"]}
     d["search"] = {"budget": 8}
     d["verify"] = {"top": 1}
-    d["reference"] = {"scenes": [str(ROOT / "examples" / "unit-bare-forward.toml")]}
-    req = design_request_from_dict(copy.deepcopy(d))
+    d["reference"] = {"scenes": d["reference"]["scenes"][:1]}
+    req = design_request_from_dict(d)
     return design(req, seed=0), req
 
 
