@@ -41,6 +41,7 @@ rescaled to the unit's own contact area (3 dB per doubling, ``planner.threshold`
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -107,7 +108,8 @@ class DesignRequest:
         return self if seed is None else replace(self, search=replace(self.search, seed=seed))
 
 
-def _strings(choices: tuple[str, ...] | None = None):
+def _strings(choices: tuple[str, ...] | None = None
+             ) -> Callable[[Any, Spec, str, Context], tuple[str, ...]]:
     """A reader of a non-empty list of distinct texts (each one of ``choices`` if given)."""
     def read(value: Any, spec: Spec, path: str, ctx: Context) -> tuple[str, ...]:
         if not isinstance(value, list | tuple) or not all(isinstance(v, str) for v in value):
