@@ -10,9 +10,10 @@ tensile modulus, not the small-strain Young's modulus, and published estimates d
 Database). The library default is the neo-Hookean value implied by the datasheet
 100 % modulus, E = 3 sigma_100 / (2 - 1/4) (incompressible uniaxial nominal stress
 mu (lambda - lambda^-2) at stretch 2, E = 3 mu); the alternate set fitted to public tensile data
-is :data:`SILICONE_E_TENSILE_FIT_Pa`. Silicone ``loss_factor`` defaults to 0 (purely elastic);
-a typical value for soft platinum-cure silicones at 100-200 Hz is eta ~ 0.1 (an estimate of
-order 0.05-0.3, not a datasheet number), set it per layer when damping matters.
+is :data:`SILICONE_E_TENSILE_FIT_Pa`. Silicone ``loss_factor`` is 0.1, an estimate for soft
+platinum-cure silicones at 100-250 Hz (order 0.05-0.3, not a datasheet number); set it per
+ring when damping matters. The silicones' numbers and sources live in one file,
+``silicones/catalogue.toml`` (the :mod:`silicones` package), which the unit designer reads too.
 """
 
 from __future__ import annotations
@@ -22,12 +23,12 @@ import re
 from dataclasses import dataclass
 
 from fieldspec import FieldError
+from silicones import Silicone, read_catalogue
 
 __all__ = [
     "ALIASES",
     "BONE_LOSS_FACTOR",
     "MATERIALS",
-    "SILICONE_LOSS_FACTOR",
     "SOFT_TISSUE_LOSS_FACTOR",
     "Material",
     "SILICONE_E_NEO_HOOKEAN_Pa",
@@ -125,9 +126,6 @@ SOFT_TISSUE_LOSS_FACTOR = 0.3
 #: Cortical bone: loss tangent about 0.01-0.03 from 1 to 100 Hz (Lakes, Katz and Sternstein
 #: 1979, J. Biomech. 12:657).
 BONE_LOSS_FACTOR = 0.02
-#: Platinum-cure silicone elastomers at 100-250 Hz: no datasheet gives a loss factor;
-#: dynamic tests of soft silicones put tan delta around 0.05-0.3. 0.1 is an estimate.
-SILICONE_LOSS_FACTOR = 0.1
 
 
 def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str,
@@ -139,52 +137,32 @@ def _tissue(name: str, E_kPa: float, density: float, nu: float, layer: str,
                     f"{_TISSUE_SRC}: {layer}; {damping}")
 
 
-#: Smooth-On datasheet 100 % tensile modulus [Pa] (Ecoflex 00-10, 00-50, Dragon Skin 10
-#: Medium and 30 technical bulletins).
-SILICONE_MODULUS_100_Pa: dict[str, float] = {
-    "ecoflex-00-10": 55e3,
-    "ecoflex-00-50": 83e3,
-    "dragon-skin-10-medium": 152e3,
-    "dragon-skin-30": 593e3,
-}
+#: The silicones, from the shared catalogue (``silicones/catalogue.toml``: each number with its
+#: source); the unit designer (``planner.design``) reads the same file.
+_CATALOGUE = read_catalogue()
+#: Smooth-On datasheet 100 % tensile modulus [Pa].
+SILICONE_MODULUS_100_Pa: dict[str, float] = {s.name: s.modulus_100_Pa for s in _CATALOGUE}
 #: Small-strain E [Pa], neo-Hookean from the datasheet 100 % modulus (library default).
-SILICONE_E_NEO_HOOKEAN_Pa: dict[str, float] = {
-    "ecoflex-00-10": 95e3,
-    "ecoflex-00-50": 142e3,
-    "dragon-skin-10-medium": 260e3,
-    "dragon-skin-30": 1016e3,
-}
+SILICONE_E_NEO_HOOKEAN_Pa: dict[str, float] = {s.name: s.E_Pa for s in _CATALOGUE}
 #: Small-strain E [Pa] fitted to public tensile data (Marechal et al., Soft Robotics Materials
-#: Database). An alternative to the default, 2-4x softer.
+#: Database), where the catalogue has one. An alternative to the default, 2-4x softer.
 SILICONE_E_TENSILE_FIT_Pa: dict[str, float] = {
-    "ecoflex-00-10": 21e3,
-    "ecoflex-00-50": 59e3,
-    "dragon-skin-10-medium": 129e3,
-    "dragon-skin-30": 538e3,
-}
-# (specific gravity, Shore hardness, letter) from the Smooth-On datasheets; the letters A-D are
-# the encapsulation materials of Guo et al. 2025.
-_SILICONE_DATA = {
-    "ecoflex-00-10": (1.04, "00-10", "A"),
-    "ecoflex-00-50": (1.07, "00-50", "B"),
-    "dragon-skin-10-medium": (1.07, "10A", "C"),
-    "dragon-skin-30": (1.08, "30A", "D"),
-}
+    s.name: s.E_tensile_fit_Pa for s in _CATALOGUE if s.E_tensile_fit_Pa is not None}
 
 
-def _silicone(name: str) -> Material:
-    sg, shore, letter = _SILICONE_DATA[name]
+def _silicone(s: Silicone) -> Material:
+    letter = f" (material {s.letter} of Guo et al. 2025)" if s.letter else ""
+    fit = ("" if s.E_tensile_fit_Pa is None else
+           f"; a tensile-data fit (Marechal et al., Soft Robotics Materials Database) gives "
+           f"{s.E_tensile_fit_Pa / 1e3:g} kPa (SILICONE_E_TENSILE_FIT_Pa)")
     source = (
-        f"Smooth-On datasheet: specific gravity {sg}, Shore {shore}, 100 % modulus "
-        f"{SILICONE_MODULUS_100_Pa[name] / 1e3:g} kPa (material {letter} of Guo et al. 2025). "
-        f"E = {SILICONE_E_NEO_HOOKEAN_Pa[name] / 1e3:g} kPa: neo-Hookean small-strain modulus "
-        f"from the 100 % modulus (default); a tensile-data fit (Marechal et al., Soft Robotics "
-        f"Materials Database) gives {SILICONE_E_TENSILE_FIT_Pa[name] / 1e3:g} kPa "
-        f"(SILICONE_E_TENSILE_FIT_Pa). nu 0.49: nearly incompressible, as cured silicone "
-        f"rubber is. Loss factor {SILICONE_LOSS_FACTOR:g}: an estimate (no datasheet value)."
+        f"Smooth-On datasheet: specific gravity {s.density_kg_m3 / 1e3:g}, Shore {s.shore}, "
+        f"100 % modulus {s.modulus_100_Pa / 1e3:g} kPa{letter}. "
+        f"E = {s.E_Pa / 1e3:g} kPa: neo-Hookean small-strain modulus from the 100 % modulus "
+        f"(default){fit}. nu {s.nu:g}: {s.sources['nu']}. Loss factor {s.loss_factor:g}: "
+        f"{s.sources['loss_factor']}."
     )
-    return Material(name, SILICONE_E_NEO_HOOKEAN_Pa[name], sg * 1000.0, 0.49,
-                    SILICONE_LOSS_FACTOR, source)
+    return Material(s.name, s.E_Pa, s.density_kg_m3, s.nu, s.loss_factor, source)
 
 
 _ALL = (
@@ -192,7 +170,7 @@ _ALL = (
     _tissue("subcutaneous", 10.0, 1116.0, 0.47, "subcutaneous tissue"),
     _tissue("muscle", 53.0, 1116.0, 0.47, "muscle"),
     _tissue("bone", 2.94e6, 2000.0, 0.32, "skeleton", BONE_LOSS_FACTOR),
-    *(_silicone(name) for name in _SILICONE_DATA),
+    *(_silicone(s) for s in _CATALOGUE),
     Material("pcb", 2.5e9, 1420.0, 0.34, 0.0, "DuPont Kapton HN polyimide film datasheet"),
     Material(
         "motor", 100e9, 7800.0, 0.3, 0.0,
@@ -209,11 +187,8 @@ ALIASES: dict[str, str] = {
     "fat": "subcutaneous",
     "epidermis-and-dermis": "skin",
     "skeleton": "bone",
-    "a": "ecoflex-00-10",
-    "b": "ecoflex-00-50",
-    "c": "dragon-skin-10-medium",
-    "dragon-skin-10": "dragon-skin-10-medium",
-    "d": "dragon-skin-30",
+    **{s.letter.lower(): s.name for s in _CATALOGUE if s.letter},
+    **{alias: s.name for s in _CATALOGUE for alias in s.aliases},
     "fpcb": "pcb",
     "kapton": "pcb",
 }

@@ -32,7 +32,8 @@ from typing import Any
 from fieldspec import FieldError
 
 __all__ = ["DIGEST_KEY", "KIND", "LEGACY_FORMAT", "SCHEMA_VERSION", "PlanCheck", "PlanRecord",
-           "PlanRecordError", "check_plan", "plan_digest", "schema_problems", "seal_plan"]
+           "PlanRecordError", "canonical_digest", "check_plan", "plan_digest", "schema_problems",
+           "seal_plan"]
 
 SCHEMA_VERSION = 1
 KIND = "hapticrom.plan"
@@ -70,10 +71,16 @@ def _canonical(d: dict[str, Any]) -> bytes:
         "utf-8")
 
 
+def canonical_digest(document: dict[str, Any], key: str) -> str:
+    """sha256 hex of the canonical JSON of ``document`` without its digest ``key`` (the form of
+    every sealed record: plan.json, the design record)."""
+    return hashlib.sha256(_canonical({k: v for k, v in document.items() if k != key}))\
+        .hexdigest()
+
+
 def plan_digest(plan: dict[str, Any]) -> str:
     """sha256 hex of the canonical JSON of ``plan`` without ``plan_sha256``."""
-    return hashlib.sha256(_canonical({k: v for k, v in plan.items() if k != DIGEST_KEY}))\
-        .hexdigest()
+    return canonical_digest(plan, DIGEST_KEY)
 
 
 def seal_plan(plan: dict[str, Any]) -> dict[str, Any]:

@@ -45,7 +45,7 @@ class Prepared:
     shared: list[Extrapolation] = field(default_factory=list)  # site and timing values
 
 
-def _load_rom(req: LayoutRequest) -> Any:
+def load_rom(req: LayoutRequest) -> Any:
     """The envelope model of ``timing.model`` ("": none, the drive law's own envelope),
     trained for ``timing.actuator``."""
     if not req.timing.model:
@@ -160,7 +160,7 @@ def prepare(req: LayoutRequest) -> Prepared:
     except (OSError, ValueError) as err:  # ModelFileError: missing, malformed, altered
         raise LayoutError("model.path", f"model.path = {short_repr(req.model)}: {err}") from None
     _check_actuator(req, predictor)
-    rom = _load_rom(req) if req.timing.enabled else None
+    rom = load_rom(req) if req.timing.enabled else None
     motor = rom.motor if rom is not None else drive_law(req.timing.actuator)
     domain = build_domain(predictor, req.model, rom, req.timing.model if rom else None)
     names = predictor.input_names

@@ -14,5 +14,5 @@ Pattern (every module follows it, so adding a command is adding a module and a n
 
 #: Module names of the subcommands, in the order ``hapticrom --help`` lists them.
 COMMANDS: tuple[str, ...] = ("simulate", "reproduce", "generate", "dataset", "ingest", "train",
-                             "refine", "predict", "models", "calibrate", "plan", "play",
+                             "refine", "predict", "models", "calibrate", "plan", "design", "play",
                              "emulate", "bench", "explore")

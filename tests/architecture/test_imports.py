@@ -39,6 +39,8 @@ LAZY_MODULES = {
     "pysindy": "the `train` extra; only identifying the envelope model needs it",
     "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it "
                 "(surrogate/estimators/lgbm.py, the output-choice study)",
+    "optuna": "0.22 s, the `design` extra: only `search.optimiser = \"tpe\"` needs it",
+    "cma": "2.3 s, the `design` extra: only `search.optimiser = \"cmaes\"` needs it",
 }
 
 #: (file, imported module) -> reason, for project modules imported inside a function.

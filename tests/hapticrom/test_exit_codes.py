@@ -43,6 +43,7 @@ def test_help_is_0_and_a_missing_command_is_2(capsys):
     ["models", "show", "{tmp}/none"],
     ["calibrate", "missing.csv", "--fit", "skin_E_kPa", "--out", "{tmp}/cal.json"],
     ["plan", "missing.toml"],
+    ["design", "missing.toml", "--out-dir", "{tmp}/design"],
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "log",
      "--out", "{tmp}/play"],
     ["play", "{tmp}/none.json", "examples/pattern-sweep.toml", "--device", "nonsense"],
@@ -59,7 +60,7 @@ def test_bad_input_exits_2_for_every_command(tmp_path, capsys, argv):
 
 def test_every_command_has_a_bad_input_case_above():
     covered = {"simulate", "reproduce", "generate", "dataset", "ingest", "train", "refine",
-               "predict", "models", "calibrate", "plan", "play", "emulate", "bench",
+               "predict", "models", "calibrate", "plan", "design", "play", "emulate", "bench",
                "explore"}
     assert covered == set(COMMANDS)
 
