@@ -11,7 +11,7 @@
 * ``de``: scipy's differential evolution with ``integrality`` (one vectorised call per
   generation);
 * ``grid``: every design of the exhaustive grid (:meth:`DesignSpace.grid`), the reference
-  the others are measured against (bench/bench_design.py).
+  the others are measured against (bench/planner/design.py).
 
 Entries with a single value (a space narrowed to one orientation, say) are held fixed. Every
 method stops once ``budget`` distinct designs were evaluated (the grid: all of it); a run

@@ -1,6 +1,6 @@
 """The unit search: each optimiser against the exhaustive grid of the same evaluations.
 
-    .venv/bin/python bench/bench_design.py [--request examples/design-forearm.toml]
+    .venv/bin/python bench/planner/design.py [--request examples/design-forearm.toml]
         [--seeds 0 1 2] [--methods de cmaes tpe] [--budget 200] [--materials catalogue]
 
 The request's space (default: the forearm example's, 6 catalogue silicones, 1036 designs) is
@@ -27,7 +27,7 @@ from planner.design.run import model_domain
 from planner.design.search import run_search
 from planner.design.space import DesignSpace
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _run(req, space, method: str, budget: int, seed: int) -> dict:
