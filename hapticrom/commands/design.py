@@ -101,6 +101,7 @@ def _print_verify(v: dict[str, Any]) -> None:
 
 
 def _scene_text(outcome: Any) -> str:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from fem.scene import dump_scene_toml, scene_from_dict
 
     w = outcome.winner
@@ -129,6 +130,7 @@ def _write(path: Path, text: str) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from planner.design import design, load_design_request
 
     out = Path(args.out_dir) if args.out_dir else None
@@ -137,6 +139,7 @@ def _run(args: argparse.Namespace) -> int:
     request = load_design_request(args.request)
     tissue = None
     if args.tissue:
+        # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
         from planner.tissue import load_tissue
 
         tissue = load_tissue(args.tissue)
@@ -146,6 +149,7 @@ def _run(args: argparse.Namespace) -> int:
     _print_outcome(outcome)
     verify = None
     if outcome.winner is not None and not args.no_verify:
+        # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
         from planner.design.verify import verify_search
 
         try:
@@ -163,6 +167,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _write_outputs(out: Path, outcome: Any, verify: dict[str, Any] | None) -> None:
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from planner.design.figure import write_design_plot
     from planner.design.layout_file import layout_toml
     from planner.design.record import design_record

@@ -24,6 +24,7 @@ __all__ = ["band_solver", "unit_scene", "unit_space"]
 
 def unit_space(model: str) -> Any:
     """The parameter space of the model's training dataset (it builds the scenes)."""
+    # lazy: the command's FE solve loads only when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.data.store import Store
 
     return Store.open(_dataset_path(model)).space
@@ -47,6 +48,7 @@ def unit_scene(space: Any, site: dict[str, Any], inputs: dict[str, Any],
 def band_solver(model: str, site: dict[str, Any]) -> Any:
     """A :data:`planner.design.verify.BandSolve` on the model's training scenes; raises
     RuntimeError when a sweep fails."""
+    # lazy: the command's FE solve loads only when it runs (`hapticrom --help`: 0.4 s)
     from fem.results import magnitude
     from fem.scene import scene_from_dict
     from fem.sweep import sweep

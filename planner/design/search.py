@@ -88,6 +88,7 @@ def _grid(w: _Walk, batch: int, seed: int) -> None:
 
 
 def _tpe(w: _Walk, batch: int, seed: int) -> None:
+    # lazy: optuna (the `design` extra, 0.22 s to import) only for search.optimiser = "tpe"
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -121,6 +122,7 @@ def _suggest(trial: Any, dims: list, rings: tuple[int, ...]) -> list[float]:
 
 
 def _cmaes(w: _Walk, batch: int, seed: int) -> None:
+    # lazy: cma (the `design` extra, 2.3 s to import) only for search.optimiser = "cmaes"
     import cma
 
     lo, hi, integer = w.lo[w.free], w.hi[w.free], w.integer[w.free]
@@ -139,6 +141,7 @@ def _cmaes(w: _Walk, batch: int, seed: int) -> None:
 
 
 def _de(w: _Walk, batch: int, seed: int) -> None:
+    # lazy: scipy.optimize only for the optimiser that runs (the others import their own)
     from scipy.optimize import differential_evolution
 
     lo, hi, integer = w.lo[w.free], w.hi[w.free], w.integer[w.free]
