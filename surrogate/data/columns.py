@@ -23,6 +23,10 @@ solver's 1e-3 error tolerance), frequency-major:
 * ``sweep_profile_u{c}_re_um`` / ``_im_um`` (list<float32>, n_f * n_p: entry i * n_p + j is
   frequency i at distance j; ``numpy.reshape(n_f, n_p)``);
 * ``sweep_error_estimate`` (the solver's relative error estimate) and ``sweep_full_solves``.
+
+These are the columns every reader gets; a compact dataset stores the float lists as integer
+codes (:mod:`surrogate.data.codec`, within 3e-4 of the band maximum at each location) and the
+store decodes them.
 """
 
 from __future__ import annotations

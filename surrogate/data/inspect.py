@@ -13,6 +13,7 @@ import numpy as np
 import pyarrow as pa
 
 from fem.scene import SceneError, scene_from_dict, scene_hash
+from surrogate.data.codec import ARRAY_COLUMNS, CodecError
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
@@ -63,7 +64,10 @@ def validate_dataset(path: str | Path, rehash: bool = False,
     twice; generated rows have unique sample indices (unless merged); statuses are "ok" or
     "failed"; failed rows carry error text; generated ok rows have finite amplitudes and a
     profile on the manifest grid; parameter values lie in the space; each part's solver is
-    in the manifest history. ``rehash`` recomputes every sample_id from scene_json."""
+    in the manifest history. A compact sweep dataset (:mod:`surrogate.data.codec`): every
+    part's codes decode, its codec is the manifest's, and its codec error per column -- the
+    one recorded when it was written and the one its stored steps prove -- is within the
+    codec's bound. ``rehash`` recomputes every sample_id from scene_json."""
     store = Store.open(path, check=False)
     problems = [f"_manifest.json: {p}" for p in manifest_problems(store)]
     if any("section(s) are missing" in p or "not a valid space" in p for p in problems):
@@ -73,7 +77,7 @@ def validate_dataset(path: str | Path, rehash: bool = False,
     if notes is not None and check.strays:
         notes.append(f"ignored (not part of the dataset): {', '.join(check.strays)}")
     problems += part_problems(store)
-    schema = store.schema
+    schema = store.stored_schema
     tables = []
     for part in store.parts():
         if not part.exists():
@@ -87,6 +91,13 @@ def validate_dataset(path: str | Path, rehash: bool = False,
             problems.append(f"{part.name}: schema differs from the dataset schema")
             continue
         problems += _check_part_solver(store, part)
+        if store.codec is not None:
+            problems += _check_codec(store, part, t)
+            try:
+                t = store.decode_part(part, t)
+            except DatasetError as err:
+                problems.append(str(err))
+                continue
         tables.append(t.replace_schema_metadata(None))
     if not tables:
         return problems
@@ -104,6 +115,40 @@ def _check_part_solver(store: Store, part: Path) -> list[str]:
         return [f"{part.name}: written by solver {solver.get('version')} "
                 f"({solver.get('hash')}), which the manifest does not list"]
     return []
+
+
+def _check_codec(store: Store, part: Path, stored: pa.Table) -> list[str]:
+    """A compact part's codec against the manifest's, and its errors against the bound."""
+    codec = store.codec
+    assert codec is not None
+    name = part.name.removeprefix(".").removesuffix(".tmp")
+    own = store.part_metadata(part).get("codec")
+    if own != codec.part_record():
+        return [f"{name}: written with codec {own!r}, not the dataset's {codec.part_record()}"]
+    problems = []
+    recorded = (store.manifest.get("parts") or {}).get(name, {}).get("codec_error")
+    if not isinstance(recorded, dict) or set(recorded) != set(ARRAY_COLUMNS):
+        problems.append(f"{name}: the manifest records no codec error for every column")
+        recorded = {}
+    try:
+        proven = codec.proven(stored)
+    except CodecError as err:
+        return [*problems, f"{name}: its codes do not decode: {err}"]
+    for col in ARRAY_COLUMNS:
+        err = recorded.get(col)
+        if err is not None and not (isinstance(err, float | int) and 0 <= err <= codec.bound):
+            problems.append(f"{name}: {col}: codec error {err!r} recorded when it was written "
+                            f"is above the bound {codec.bound:g} (of the band maximum at the "
+                            "location)")
+        if proven[col] > codec.bound:
+            problems.append(f"{name}: {col}: its stored steps allow a codec error of "
+                            f"{proven[col]:.3g}, above the bound {codec.bound:g} (of the band "
+                            "maximum at the location)")
+        elif isinstance(err, float | int) and err > proven[col] * (1 + 1e-9):
+            problems.append(f"{name}: {col}: codec error {err:.3g} recorded, more than its "
+                            f"codes allow ({proven[col]:.3g}): the record or the part was "
+                            "edited")
+    return problems
 
 
 def _check_rows(store: Store, df: Any) -> list[str]:

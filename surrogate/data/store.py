@@ -8,11 +8,19 @@ Layout::
     DIR/part-000001.parquet     immutable data parts (zstd), written atomically
     DIR/.part-000002.parquet.tmp   a part being written (or left by a killed run)
 
+A sweep dataset written by this version is compact (the manifest's ``codec``,
+:mod:`surrogate.data.codec`): its parts store the sweep lists as integer codes, and every
+reader here gets back the float32 lists (:meth:`Store.read_table`); the manifest records, per
+part (``parts[NAME].codec_error``) and for the dataset (``codec.max_error``), the largest codec
+error per column measured when the part was written. A dataset without ``codec`` (every one
+written before) stores the lists as written, and stays so when extended.
+
 The dataset is the parts the manifest records (``parts``: rows, a digest of the rows and of
 the file, :mod:`surrogate.data.digests`); every reader (:meth:`Store.open`) checks them and
 refuses a dataset whose parts, rows or manifest do not match, naming the part. Any other file
 in the directory is a stray: reported and never read. Read it with pandas from the manifest's
-list (what :meth:`Store.read` returns)::
+list (what :meth:`Store.read` returns, for a dataset without a codec; a compact one's codes
+are decoded as ``docs/datasets.md`` shows)::
 
     m = json.load(open(f"{DIR}/_manifest.json"))
     df = pd.concat([pd.read_parquet(f"{DIR}/{name}") for name in sorted(m["parts"])])
@@ -51,6 +59,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from fieldspec.documents import read_json_file
+from surrogate.data.codec import CodecError, SweepCodec
 from surrogate.data.columns import (
     COMPLEX_FIELDS,
     OUTPUT_FIELDS,
@@ -148,6 +157,8 @@ class Store:
                 "space": space.to_dict(), "space_hash": space.space_hash(),
                 "columns": [{"name": f.name, "type": str(f.type)} for f in arrow_schema(space)]}
         data = {**head, **manifest}
+        if data.get("codec") is not None:  # the codec's parameters; errors come with parts
+            data["codec"] = _codec_from(data["codec"], path).to_dict()
         data.setdefault("runs", [])
         data["parts"] = {}
         data["digest"] = manifest_digest(data)
@@ -221,9 +232,23 @@ class Store:
 
     @property
     def schema(self) -> pa.Schema:
-        """The Arrow schema every part must have: the columns the manifest records (a
-        dataset written before a column existed does not have it)."""
+        """The Arrow schema of the rows (what :meth:`read_table` returns): the columns the
+        manifest records (a dataset written before a column existed does not have it)."""
         return recorded_schema(self.space, self.manifest)
+
+    @property
+    def codec(self) -> SweepCodec | None:
+        """The codec of a compact sweep dataset (:mod:`surrogate.data.codec`), None for a
+        dataset stored as written (float lists)."""
+        recorded = self.manifest.get("codec")
+        return None if recorded is None else _codec_from(recorded, self.path / MANIFEST_NAME)
+
+    @property
+    def stored_schema(self) -> pa.Schema:
+        """The Arrow schema every part must have: :attr:`schema`, or its stored form when
+        the dataset has a codec."""
+        codec = self.codec
+        return self.schema if codec is None else codec.stored_schema(self.schema)
 
     def save_manifest(self) -> None:
         """Write the (modified) manifest atomically."""
@@ -300,14 +325,31 @@ class Store:
                 rows = [{k: v for k, v in r.items() if k not in later} for r in rows]
             table = rows_to_table(rows, self.schema)
         meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
+        codec, errors = self.codec, None
+        options: dict[str, Any] = {"compression": "zstd"}
+        if codec is not None:
+            try:
+                table, errors = codec.encode(table)
+            except CodecError as err:
+                raise DatasetError("rows", f"{self.path}: rows not stored: {err}") from None
+            worst = max(errors.values(), default=0.0)
+            if worst > codec.bound:  # cannot happen with tolerance < bound; never store it
+                raise DatasetError("codec", f"{self.path}: codec error {worst:.3g} above its "
+                                   f"bound {codec.bound:g}: rows not stored")
+            meta.update(codec=codec.part_record(), codec_error=errors)
+            options = codec.parquet_options(table.schema)
         table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
         seq = self._next_seq()
         final = self.path / f"part-{seq:06d}.parquet"
         tmp = self.path / f".{final.name}.tmp"
-        pq.write_table(table, tmp, compression="zstd")
+        pq.write_table(table, tmp, **options)
         with open(tmp, "rb") as fh:
             os.fsync(fh.fileno())
-        self.manifest.setdefault("parts", {})[final.name] = part_entry(tmp)
+        entry = part_entry(tmp)
+        if errors is not None:
+            entry["codec_error"] = errors
+            _note_codec_error(self.manifest["codec"], errors)
+        self.manifest.setdefault("parts", {})[final.name] = entry
         self.save_manifest()  # the commit point: the part belongs to the dataset from here on
         os.replace(tmp, final)
         _fsync_dir(self.path)
@@ -328,10 +370,12 @@ class Store:
             raise DatasetError(str(part), f"cannot read part {part}: {err}") from None
 
     def read_table(self, columns: Sequence[str] | None = None) -> pa.Table:
-        """All rows as one Arrow table with the dataset schema. Reading every column checks
-        each part's rows against the digest the manifest recorded (:class:`DatasetError`
-        naming the part)."""
-        tables = [self.read_part(p, columns) for p in self.parts()]
+        """All rows as one Arrow table with the dataset schema (a compact dataset's parts
+        decoded: :meth:`decode_part`). Reading every column checks each part's rows against
+        the digest the manifest recorded (:class:`DatasetError` naming the part)."""
+        codec = self.codec
+        stored = codec.stored_columns(columns) if codec is not None and columns else columns
+        tables = [self.read_part(p, stored) for p in self.parts()]
         listed = self.manifest.get("parts")
         if columns is None and isinstance(listed, Mapping):
             for part, table in zip(self.parts(), tables, strict=True):
@@ -349,7 +393,23 @@ class Store:
             if columns:
                 schema = pa.schema([schema.field(c) for c in columns])
             return schema.empty_table()
+        if codec is not None:
+            tables = [self.decode_part(p, t) for p, t in zip(self.parts(), tables, strict=True)]
+            if columns:
+                tables = [t.select(list(columns)) for t in tables]
         return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+
+    def decode_part(self, part: Path, stored: pa.Table) -> pa.Table:
+        """The rows of a compact part as the dataset schema types them; :class:`DatasetError`
+        naming the part when its codes do not decode (a damaged or edited part)."""
+        codec = self.codec
+        if codec is None:
+            return stored
+        try:
+            return codec.decode(stored, self.schema)
+        except CodecError as err:
+            raise DatasetError(str(part), f"{self.path}: refused: {part.name}: its codes do "
+                               f"not decode: {err}") from None
 
     def read(self, columns: Sequence[str] | None = None) -> Any:
         """All rows as a pandas DataFrame (same as ``pandas.read_parquet(DIR)``)."""
@@ -392,6 +452,22 @@ class Store:
                 "by_source": by_source}
 
 
+def _codec_from(recorded: Any, where: Path) -> SweepCodec:
+    if not isinstance(recorded, Mapping):
+        raise DatasetError(str(where), f"{where}: codec = {recorded!r} is not a codec record")
+    try:
+        return SweepCodec.from_dict(recorded)
+    except (CodecError, KeyError, TypeError) as err:
+        raise DatasetError(str(where), f"{where}: codec: {err}") from None
+
+
+def _note_codec_error(record: dict[str, Any], errors: Mapping[str, float]) -> None:
+    """Keep the dataset's largest codec error per column in its ``codec`` record."""
+    worst = record.setdefault("max_error", {})
+    for name, err in errors.items():
+        worst[name] = max(float(worst.get(name, 0.0)), float(err))
+
+
 def rows_to_table(rows: Sequence[Mapping[str, Any]], schema: pa.Schema) -> pa.Table:
     """Arrow table from row dicts, with exactly ``schema`` (unknown keys are an error)."""
     names = set(schema.names)
@@ -427,6 +503,7 @@ def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
                           if "analysis.kind" in varied
                           else defaults.get("analysis", {}).get("kind")),
         "profile_grid_mm": None,
-        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)}}
+        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)},
+            "codec": SweepCodec().to_dict()}  # sweeps are stored compact
            if space.band is not None else {}),
     }

@@ -56,12 +56,12 @@ def test_process_pool_sweeps_match_direct_sweeps_and_resume(tmp_path):
     direct = fem.simulate(scene_from_dict(planned[1].scene))
     want = sweep_columns(direct)
     row = df.loc[1]
-    for name in ("sweep_center_uz_re_um", "sweep_edge_ur_im_um", "sweep_profile_uz_im_um"):
-        np.testing.assert_array_equal(np.asarray(row[name], dtype=np.float32),
-                                      np.asarray(want[name], dtype=np.float32))
-    got = sweep_arrays(row, "center")
-    ref = np.asarray(direct.center) * 1e6
-    assert np.abs(got - ref).max() <= 1e-6 * np.abs(ref).max()
+    for where in ("center", "edge", "profile"):  # within the codec's tolerance
+        got, ref = sweep_arrays(row, where), sweep_arrays(want, where)
+        scale = np.sqrt(np.max(np.sum(np.abs(ref) ** 2, axis=-1), axis=0))  # per location
+        err = np.maximum(np.abs((got - ref).real), np.abs((got - ref).imag)).max(axis=(0, -1))
+        assert np.all(err <= 2.51e-4 * scale)
+    assert Store.open(out).codec is not None
     assert row["sweep_full_solves"] == direct.full_solves >= 1
     m = Store.open(out).manifest
     assert m["analysis_kind"] == "sweep" and len(m["band"]["frequency_hz"]) == 16
