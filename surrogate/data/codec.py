@@ -212,9 +212,14 @@ class SweepCodec:
         step, valid = _steps(stored)
         n, L = step.shape
         arrays: dict[str, pa.Array] = {}
+        bands: set[int] = set()
         for name in present:
             where = name.split("_")[1]
             q = _codes(stored, code_column(name), valid, where, L)
+            bands.add(q.shape[2])
+            if len(bands) > 1:
+                raise CodecError(f"{code_column(name)}: list lengths give {q.shape[2]} "
+                                 f"frequencies, other code columns {min(bands - {q.shape[2]})}")
             for _ in range(self.order):
                 q = np.cumsum(q, axis=2)
             u = q * _where_steps(step, where).astype(float)[:, :, None]   # (n, locs, n_f)
