@@ -13,7 +13,7 @@ import numpy as np
 import pyarrow as pa
 
 from fem.scene import SceneError, scene_from_dict, scene_hash
-from surrogate.data.codec import ARRAY_COLUMNS, CodecError
+from surrogate.data.codec import ARRAY_COLUMNS, CodecError, SweepCodec
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
@@ -229,7 +229,10 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
     Inputs must have the same parameter columns; a row present in several inputs (same
     source and sample_id) is kept once, an "ok" copy before a "failed" one. Different solver
     versions need ``allow_mixed_solvers``. Only a merge of datasets from one space can be
-    extended by ``generate``. Returns counts; validates everything before writing."""
+    extended by ``generate``. When an input is compact (:mod:`surrogate.data.codec`) the
+    union is: compact inputs' codes pass through unchanged (never rounded twice), float-list
+    inputs are encoded, and every part records, per column, the largest error of all inputs.
+    Returns counts; validates everything before writing."""
     if not inputs:
         raise DatasetError("inputs", "merge needs at least one input dataset")
     out = Path(out)
@@ -248,8 +251,13 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
         raise DatasetError("allow_mixed_solvers", f"the inputs were computed by different "
                            f"solvers ({listed}); allow_mixed_solvers (--allow-mixed-solvers) "
                            "merges anyway")
-    table = pa.concat_tables([s.read_table() for s in stores])
-    df = table.to_pandas()
+    codec = _merge_codec(stores)
+    errors = None
+    if codec is None:
+        table = pa.concat_tables([s.read_table() for s in stores])
+    else:
+        table, errors = _stored_union(stores, codec)
+    df = table.select(["source", "sample_id", "status"]).to_pandas()
     # lexsort: the last key is the primary one -> ok rows first, then input order
     order = np.lexsort((np.arange(len(df)), df["status"].ne("ok").to_numpy()))
     keep = ~df.iloc[order].duplicated(["source", "sample_id"]).to_numpy()
@@ -258,7 +266,9 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
     hashes = {s.manifest.get("space_hash") for s in stores}
     manifest = {k: v for k, v in first.manifest.items()
                 if k not in ("format", "schema_version", "created", "space", "space_hash",
-                             "columns", "runs", "updated")}
+                             "columns", "runs", "updated", "codec", "compacted_from")}
+    if codec is not None:
+        manifest["codec"] = codec.to_dict()
     manifest.update(solver_history=list(solvers.values()), merged_from=[
         {"path": str(s.path), "space_hash": s.manifest.get("space_hash"),
          "rows": s.counts()["rows"]} for s in stores])
@@ -271,9 +281,35 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
         for start in range(0, max(merged.num_rows, 1), rows_per_part):
             chunk = merged.slice(start, rows_per_part)
             if chunk.num_rows:
-                new.write_part(chunk, {"source": "merge"})
+                new.write_part(chunk, {"source": "merge"}, encoded=errors)
     return {"rows_in": table.num_rows, "rows_out": merged.num_rows,
             "duplicates_dropped": table.num_rows - merged.num_rows, "parts": len(new.parts())}
+
+
+def _merge_codec(stores: Sequence[Store]) -> SweepCodec | None:
+    """The codec of a merge: the inputs' (one), None when no input is compact."""
+    codecs = {s.codec for s in stores if s.codec is not None}
+    if len(codecs) > 1:
+        raise DatasetError("inputs", f"the inputs are compact with different codec parameters "
+                           f"({', '.join(sorted(str(c) for c in codecs))}): not merged (their "
+                           "codes would be rounded a second time)")
+    return codecs.pop() if codecs else None
+
+
+def _stored_union(stores: Sequence[Store], codec: SweepCodec
+                  ) -> tuple[pa.Table, dict[str, float]]:
+    """Every input's rows in ``codec``'s stored form, and the largest error per column."""
+    tables, errors = [], dict.fromkeys(ARRAY_COLUMNS, 0.0)
+    for s in stores:
+        if s.codec is None:
+            table, own = codec.encode(s.read_table())
+        else:
+            table = s.read_stored()
+            own = s.manifest["codec"].get("max_error") or {}
+        tables.append(table.cast(codec.stored_schema(stores[0].schema)))
+        for col in ARRAY_COLUMNS:
+            errors[col] = max(errors[col], float(own.get(col, 0.0)))
+    return pa.concat_tables(tables), errors
 
 
 def seal_dataset(path: str | Path) -> dict[str, Any]:

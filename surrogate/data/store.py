@@ -313,10 +313,15 @@ class Store:
         return max(seqs, default=0) + 1
 
     def write_part(self, rows: Sequence[Mapping[str, Any]] | pa.Table,
-                   metadata: Mapping[str, Any] | None = None) -> Path:
+                   metadata: Mapping[str, Any] | None = None, *,
+                   encoded: Mapping[str, float] | None = None) -> Path:
         """Write ``rows`` (dicts keyed by column, missing columns are null; or an Arrow table
         with the dataset schema) as a new part, atomically. ``metadata`` goes into the
-        Parquet key-value metadata under ``hapticrom``. Call under :meth:`lock`."""
+        Parquet key-value metadata under ``hapticrom``. ``encoded``: ``rows`` is a table
+        already in the stored form of this dataset's codec (codes passed through, not rounded
+        again), with these largest errors per column. Call under :meth:`lock`."""
+        if encoded is not None:
+            return self._write_encoded(rows, metadata, encoded)
         if isinstance(rows, pa.Table):
             table = rows.replace_schema_metadata(None).cast(self.schema)
         else:
@@ -324,20 +329,33 @@ class Store:
             if later:
                 rows = [{k: v for k, v in r.items() if k not in later} for r in rows]
             table = rows_to_table(rows, self.schema)
-        meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
-        codec, errors = self.codec, None
-        options: dict[str, Any] = {"compression": "zstd"}
-        if codec is not None:
-            try:
-                table, errors = codec.encode(table)
-            except CodecError as err:
-                raise DatasetError("rows", f"{self.path}: rows not stored: {err}") from None
-            worst = max(errors.values(), default=0.0)
-            if worst > codec.bound:  # cannot happen with tolerance < bound; never store it
-                raise DatasetError("codec", f"{self.path}: codec error {worst:.3g} above its "
-                                   f"bound {codec.bound:g}: rows not stored")
-            meta.update(codec=codec.part_record(), codec_error=errors)
-            options = codec.parquet_options(table.schema)
+        codec = self.codec
+        if codec is None:
+            meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
+            return self._write(table, meta, {"compression": "zstd"}, None)
+        try:
+            stored, errors = codec.encode(table)
+        except CodecError as err:
+            raise DatasetError("rows", f"{self.path}: rows not stored: {err}") from None
+        return self._write_encoded(stored, metadata, errors)
+
+    def _write_encoded(self, table: pa.Table, metadata: Mapping[str, Any] | None,
+                       errors: Mapping[str, float]) -> Path:
+        codec = self.codec
+        if codec is None or not isinstance(table, pa.Table):
+            raise DatasetError("rows", f"{self.path}: encoded rows for a dataset without a "
+                               "codec, or not a table")
+        worst = max(errors.values(), default=0.0)
+        if worst > codec.bound:  # cannot happen with tolerance < bound; never store it
+            raise DatasetError("codec", f"{self.path}: codec error {worst:.3g} above its bound "
+                               f"{codec.bound:g}: rows not stored")
+        table = table.replace_schema_metadata(None).cast(self.stored_schema)
+        meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash"),
+                "codec": codec.part_record(), "codec_error": dict(errors)}
+        return self._write(table, meta, codec.parquet_options(table.schema), errors)
+
+    def _write(self, table: pa.Table, meta: Mapping[str, Any], options: Mapping[str, Any],
+               errors: Mapping[str, float] | None) -> Path:
         table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
         seq = self._next_seq()
         final = self.path / f"part-{seq:06d}.parquet"
@@ -347,7 +365,7 @@ class Store:
             os.fsync(fh.fileno())
         entry = part_entry(tmp)
         if errors is not None:
-            entry["codec_error"] = errors
+            entry["codec_error"] = dict(errors)
             _note_codec_error(self.manifest["codec"], errors)
         self.manifest.setdefault("parts", {})[final.name] = entry
         self.save_manifest()  # the commit point: the part belongs to the dataset from here on
@@ -375,7 +393,29 @@ class Store:
         the digest the manifest recorded (:class:`DatasetError` naming the part)."""
         codec = self.codec
         stored = codec.stored_columns(columns) if codec is not None and columns else columns
-        tables = [self.read_part(p, stored) for p in self.parts()]
+        tables = self._read_parts(stored)
+        if not tables:
+            schema = self.schema
+            if columns:
+                schema = pa.schema([schema.field(c) for c in columns])
+            return schema.empty_table()
+        if codec is not None:
+            tables = [self.decode_part(p, t) for p, t in zip(self.parts(), tables, strict=True)]
+            if columns:
+                tables = [t.select(list(columns)) for t in tables]
+        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+
+    def read_stored(self) -> pa.Table:
+        """All rows as the parts store them (a compact dataset's codes, not decoded), each
+        part checked against its recorded digest."""
+        tables = self._read_parts(None)
+        if not tables:
+            return self.stored_schema.empty_table()
+        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+
+    def _read_parts(self, columns: Sequence[str] | None) -> list[pa.Table]:
+        """Every part's stored columns; all of them checked against the recorded digests."""
+        tables = [self.read_part(p, columns) for p in self.parts()]
         listed = self.manifest.get("parts")
         if columns is None and isinstance(listed, Mapping):
             for part, table in zip(self.parts(), tables, strict=True):
@@ -388,16 +428,7 @@ class Store:
                     raise DatasetError(str(part), f"{self.path}: refused: {name}: its bytes "
                                        "do not match the sha256 recorded when it was written "
                                        "(damaged or rewritten)")
-        if not tables:
-            schema = self.schema
-            if columns:
-                schema = pa.schema([schema.field(c) for c in columns])
-            return schema.empty_table()
-        if codec is not None:
-            tables = [self.decode_part(p, t) for p, t in zip(self.parts(), tables, strict=True)]
-            if columns:
-                tables = [t.select(list(columns)) for t in tables]
-        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+        return tables
 
     def decode_part(self, part: Path, stored: pa.Table) -> pa.Table:
         """The rows of a compact part as the dataset schema types them; :class:`DatasetError`

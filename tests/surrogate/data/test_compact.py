@@ -76,17 +76,18 @@ def test_a_compact_set_records_its_codec_and_errors_and_stores_codes(tmp_path):
     assert validate_dataset(path) == []
 
 
-def _recipe() -> str:
-    text = (ROOT / "docs" / "datasets.md").read_text()
+def _recipe(doc: str) -> str:
+    text = (ROOT / doc).read_text()
     block = re.search(r"```python\n(# recipe: compact sweep dataset\n.*?)```", text, re.S)
-    assert block, "the recipe is missing from docs/datasets.md"
+    assert block, f"the recipe is missing from {doc}"
     return block.group(1)
 
 
-def test_the_documented_pandas_recipe_gives_the_stores_arrays(tmp_path):
+@pytest.mark.parametrize("doc", ["docs/datasets.md", "datasets/README.md"])
+def test_the_documented_pandas_recipe_gives_the_stores_arrays(tmp_path, doc):
     path = _dataset(tmp_path / "d", n=5)
-    code = _recipe().replace('DIR = "datasets/default-sweep"', f"DIR = {str(path)!r}")
-    assert code != _recipe()
+    code = _recipe(doc).replace('DIR = "datasets/default-sweep"', f"DIR = {str(path)!r}")
+    assert code != _recipe(doc)
     env: dict = {}
     exec(compile(code, "docs/datasets.md recipe", "exec"), env)
     df = Store.open(path).read()
@@ -297,3 +298,35 @@ def test_a_failing_compaction_leaves_no_half_written_out(tmp_path, monkeypatch, 
     assert len(calls) == 2
     assert (_bytes(out) == kept) if existing else not out.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_merge_of_compact_and_old_sets_is_compact_like_the_first(tmp_path):
+    from surrogate.data.inspect import merge_datasets
+
+    a = _dataset(tmp_path / "a", n=4)
+    b = _dataset(tmp_path / "b", n=6, compact=False)  # rows 0-3 repeat a's
+    res = merge_datasets(tmp_path / "m", [a, b])
+    assert (res["rows_in"], res["rows_out"]) == (10, 6)
+    merged = Store.open(tmp_path / "m")
+    assert merged.codec == SweepCodec() and "max_error" in merged.manifest["codec"]
+    assert validate_dataset(tmp_path / "m") == []
+    got = merged.read().sort_values("sample_index").reset_index(drop=True)
+    first = Store.open(a).read().sort_values("sample_index").reset_index(drop=True)
+    for col in ARRAY_COLUMNS:  # a's codes passed through: its rows decode identically
+        np.testing.assert_array_equal(np.stack(got[col][:4]), np.stack(first[col]))
+    errors = [e["codec_error"] for e in merged.manifest["parts"].values()]
+    of_a = _manifest(a)["codec"]["max_error"]
+    assert all(of_a[c] <= e[c] <= 2.5e-4 * (1 + 1e-6) for e in errors for c in ARRAY_COLUMNS)
+
+
+def test_merge_refuses_compact_inputs_of_other_codec_parameters(tmp_path):
+    from surrogate.data.inspect import merge_datasets
+
+    a = _dataset(tmp_path / "a", n=2)
+    b = _dataset(tmp_path / "b", n=2)
+    m = _manifest(b)
+    m["codec"]["tolerance"] = 2e-4
+    _save_manifest(b, m)
+    with pytest.raises(DatasetError, match="different codec parameters"):
+        merge_datasets(tmp_path / "m", [a, b])
+    assert not (tmp_path / "m").exists()
