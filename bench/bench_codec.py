@@ -45,7 +45,13 @@ import pyarrow.parquet as pq
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from surrogate.data.codec import ARRAY_COLUMNS, SweepCodec, location_scales  # noqa: E402
+from surrogate.data.codec import (  # noqa: E402
+    ARRAY_COLUMNS,
+    ORDER,
+    ZSTD_LEVEL,
+    SweepCodec,
+    location_scales,
+)
 from surrogate.data.columns import COMPONENTS  # noqa: E402
 from surrogate.data.store import Store  # noqa: E402
 
@@ -258,7 +264,7 @@ def quantised(predictor: str, bss: bool, level: int, edge_from_profile: bool = F
         (", no scene_json" if drop_scene else "")
     store = "Blosc2 bytedelta+zstd 9" if lib == "blosc2" else \
         f"int16{' BSS' if bss else ''}, zstd {level}"
-    return Form(f"codes on 2*{TOL:g}*M, {what}{extra}: {store}", enc, dec)
+    return Form(f"codes on 2*{TOL:g}*M, {what}{extra}, frequency-major: {store}", enc, dec)
 
 
 def zfp_form(tol: float) -> Form:
@@ -321,19 +327,22 @@ def blosc2_trunc(bits: int) -> Form:
     return Form(f"Blosc2 float32 TRUNC_PREC {bits} bits + shuffle + zstd 9", enc, dec)
 
 
-def store_codec() -> Form:
-    """The chosen form through :class:`surrogate.data.codec.SweepCodec` (what the store
-    writes: the whole part file, provenance and parameters included)."""
-    codec = SweepCodec()
+def store_codec(order: int = ORDER, level: int = ZSTD_LEVEL) -> Form:
+    """:class:`surrogate.data.codec.SweepCodec` (what the store writes: the whole part file,
+    provenance and parameters included) with differences of ``order``, zstd ``level``."""
+    codec = SweepCodec(order=order)
 
     def enc(table: pa.Table, u: np.ndarray) -> bytes:
         stored, _ = codec.encode(table)
-        return _parquet(stored, **codec.parquet_options(stored.schema))
+        return _parquet(stored, **{**codec.parquet_options(stored.schema),
+                                   "compression_level": level})
 
     def dec(data: bytes, shape: tuple[int, ...]) -> np.ndarray:
         return arrays(codec.decode(_read(data)))
 
-    return Form(f"chosen: {codec.describe()}", enc, dec)
+    chosen = "chosen: " if (order, level) == (ORDER, ZSTD_LEVEL) else ""
+    return Form(f"{chosen}codes on 2*{codec.tolerance:g}*M, order-{order} difference in f, "
+                f"distance-major: int16, zstd {level}", enc, dec)
 
 
 def forms() -> list[Form]:
@@ -346,7 +355,7 @@ def forms() -> list[Form]:
             quantised("f", False, 9, edge_from_profile=True, drop_scene=True),
             quantised("f", False, 9, lib="blosc2")]
     out += [zfp_form(TOL), zfp_form(TOL / 2), blosc2_trunc(12)]
-    out.append(store_codec())
+    out += [store_codec(2), store_codec(4), store_codec(level=9), store_codec()]
     return out
 
 

@@ -91,6 +91,12 @@ def format_info(info: dict[str, Any]) -> str:
         f"sources   {', '.join(f'{k}: {v}' for k, v in info['by_source'].items()) or '-'}",
         f"runs      {info['runs']} ({info['interrupted_runs']} interrupted)",
     ]
+    codec = info.get("codec")
+    if codec:
+        worst = codec.get("max_error")
+        lines.append(f"storage   compact: {codec['name']} v{codec['version']} (bound "
+                     f"{codec['bound']:g} of the band maximum), largest codec error "
+                     f"{'-' if worst is None else f'{worst:.2e}'}")
     if info.get("stray_files"):
         lines.append(f"note      ignored (not part of the dataset): "
                      f"{', '.join(info['stray_files'])}")

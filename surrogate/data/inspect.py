@@ -50,7 +50,16 @@ def dataset_info(path: str | Path) -> dict[str, Any]:
         "stray_files": stray_files(store.path, m.get("parts") or {}),
         "runs": len(runs), "interrupted_runs": sum(1 for r in runs if r.get("finished") is None),
         "merged_from": m.get("merged_from"),
+        "codec": _codec_summary(m.get("codec")),
     }
+
+
+def _codec_summary(record: Any) -> dict[str, Any] | None:
+    """A compact dataset's codec parameters and its largest error over every column."""
+    if not isinstance(record, dict):
+        return None
+    keep = {k: record.get(k) for k in ("name", "version", "tolerance", "bound", "order")}
+    return {**keep, "max_error": max((record.get("max_error") or {}).values(), default=None)}
 
 
 def validate_dataset(path: str | Path, rehash: bool = False,

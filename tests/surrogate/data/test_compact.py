@@ -14,12 +14,13 @@ import pytest
 from test_sweep_data import _dataset, fake_sweep
 
 from hapticrom.cli import main
+from hapticrom.commands.dataset import format_info
 from surrogate.data.codec import ARRAY_COLUMNS, STEP_COLUMN, SweepCodec, code_column
 from surrogate.data.columns import sweep_arrays
 from surrogate.data.compact import compact_dataset
 from surrogate.data.digests import part_entry
 from surrogate.data.errors import DatasetError
-from surrogate.data.inspect import validate_dataset
+from surrogate.data.inspect import dataset_info, validate_dataset
 from surrogate.data.integrity import manifest_digest
 from surrogate.data.store import MANIFEST_NAME, Store
 from surrogate.data.worker import outputs_from_result
@@ -74,6 +75,11 @@ def test_a_compact_set_records_its_codec_and_errors_and_stores_codes(tmp_path):
     assert meta["codec"] == SweepCodec().part_record()
     assert meta["codec_error"] == m["parts"][store.parts()[0].name]["codec_error"]
     assert validate_dataset(path) == []
+    info = dataset_info(path)
+    assert info["codec"] == {**SweepCodec().part_record(),
+                             "max_error": max(m["codec"]["max_error"].values())}
+    assert "storage   compact: sweep-step-codes v1 (bound 0.0003" in format_info(info)
+    assert dataset_info(_dataset(tmp_path / "old", compact=False))["codec"] is None
 
 
 def _recipe(doc: str) -> str:
