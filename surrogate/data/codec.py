@@ -44,15 +44,17 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
 from surrogate.data.columns import COMPONENTS
+from surrogate.data.errors import DatasetError
 
 __all__ = ["ARRAY_COLUMNS", "BOUND", "CODEC_NAME", "STEP_COLUMN", "CodecError", "SweepCodec",
-           "code_column", "location_scales"]
+           "code_column", "location_scales", "worst_errors"]
 
 CODEC_NAME = "sweep-step-codes"
 CODEC_VERSION = 1
@@ -77,6 +79,15 @@ _INT16 = np.iinfo(np.int16).max
 
 class CodecError(ValueError):
     """Values the codec cannot store (non-finite, ragged, or a damaged stored part)."""
+
+
+def worst_errors(*errors: Mapping[str, float]) -> dict[str, float]:
+    """The largest error per column over several records (column -> error)."""
+    out: dict[str, float] = {}
+    for record in errors:
+        for name, err in record.items():
+            out[name] = max(out.get(name, 0.0), float(err))
+    return out
 
 
 def code_column(name: str) -> str:
@@ -114,6 +125,17 @@ class SweepCodec:
                              f"{self.order} would not fit int16 (allowed >= {lowest:.3g})")
 
     # ---- description
+
+    @classmethod
+    def from_record(cls, recorded: Any, where: str | Path) -> SweepCodec:
+        """The codec of a manifest's ``codec`` entry; :class:`DatasetError` naming ``where``
+        (the manifest) for a record that is not one this version reads."""
+        try:
+            if not isinstance(recorded, Mapping):
+                raise CodecError(f"{recorded!r} is not a codec record")
+            return cls.from_dict(recorded)
+        except (CodecError, KeyError, TypeError) as err:
+            raise DatasetError(str(where), f"{where}: codec: {err}") from None
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> SweepCodec:

@@ -37,9 +37,11 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from surrogate.data.errors import DatasetError
+
 __all__ = ["COMPLEX_FIELDS", "COMPONENTS", "OUTPUT_FIELDS", "PROFILE_OUTPUTS",
            "PROVENANCE_FIELDS", "SWEEP_FIELDS", "arrow_schema", "complex_columns", "profile_matrix",
-           "recorded_schema", "sweep_arrays", "sweep_columns"]
+           "recorded_schema", "rows_to_table", "sweep_arrays", "sweep_columns"]
 
 #: Component names in the order of the solver's result arrays (U_r, U_z, U_t).
 COMPONENTS = ("r", "z", "t")
@@ -215,3 +217,22 @@ def profile_matrix(df: Any, grid_mm: Sequence[float],
         inside = (grid >= d.min()) & (grid <= d.max())
         out[i, inside] = np.interp(grid[inside], d, a)
     return out
+
+
+def rows_to_table(rows: Sequence[Mapping[str, Any]], schema: pa.Schema) -> pa.Table:
+    """Arrow table from row dicts, with exactly ``schema`` (unknown keys are an error)."""
+    names = set(schema.names)
+    for i, row in enumerate(rows):
+        extra = set(row) - names
+        if extra:
+            raise DatasetError("row", f"row {i} has unknown columns {sorted(extra)}")
+    cols = {name: [_py(row.get(name)) for row in rows] for name in schema.names}
+    return pa.table(cols, schema=schema)
+
+
+def _py(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value

@@ -13,7 +13,7 @@ import numpy as np
 import pyarrow as pa
 
 from fem.scene import SceneError, scene_from_dict, scene_hash
-from surrogate.data.codec import ARRAY_COLUMNS, CodecError, SweepCodec
+from surrogate.data.codec import ARRAY_COLUMNS, CodecError, SweepCodec, worst_errors
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
@@ -308,7 +308,7 @@ def _merge_codec(stores: Sequence[Store]) -> SweepCodec | None:
 def _stored_union(stores: Sequence[Store], codec: SweepCodec
                   ) -> tuple[pa.Table, dict[str, float]]:
     """Every input's rows in ``codec``'s stored form, and the largest error per column."""
-    tables, errors = [], dict.fromkeys(ARRAY_COLUMNS, 0.0)
+    tables, errors = [], [dict.fromkeys(ARRAY_COLUMNS, 0.0)]
     for s in stores:
         if s.codec is None:
             table, own = codec.encode(s.read_table())
@@ -316,9 +316,8 @@ def _stored_union(stores: Sequence[Store], codec: SweepCodec
             table = s.read_stored()
             own = s.manifest["codec"].get("max_error") or {}
         tables.append(table.cast(codec.stored_schema(stores[0].schema)))
-        for col in ARRAY_COLUMNS:
-            errors[col] = max(errors[col], float(own.get(col, 0.0)))
-    return pa.concat_tables(tables), errors
+        errors.append(own)
+    return pa.concat_tables(tables), worst_errors(*errors)
 
 
 def seal_dataset(path: str | Path) -> dict[str, Any]:

@@ -54,12 +54,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from fieldspec.documents import read_json_file
-from surrogate.data.codec import CodecError, SweepCodec
+from surrogate.data.codec import CodecError, SweepCodec, worst_errors
 from surrogate.data.columns import (
     COMPLEX_FIELDS,
     OUTPUT_FIELDS,
@@ -67,6 +66,7 @@ from surrogate.data.columns import (
     arrow_schema,
     profile_matrix,
     recorded_schema,
+    rows_to_table,
 )
 from surrogate.data.digests import (
     PART_RE,
@@ -153,12 +153,15 @@ class Store:
         path = Path(path)
         if path.exists() and (not path.is_dir() or any(path.iterdir())):
             raise DatasetError(str(path), f"{path} exists and is not an empty directory")
+        if manifest.get("codec") is not None and space.band is None:
+            raise DatasetError("codec", "only sweep datasets (a space with a band) have a "
+                               "compact form")
         head = {"format": FORMAT, "schema_version": SCHEMA_VERSION, "created": utc_now(),
                 "space": space.to_dict(), "space_hash": space.space_hash(),
                 "columns": [{"name": f.name, "type": str(f.type)} for f in arrow_schema(space)]}
         data = {**head, **manifest}
         if data.get("codec") is not None:  # the codec's parameters; errors come with parts
-            data["codec"] = _codec_from(data["codec"], path).to_dict()
+            data["codec"] = SweepCodec.from_record(data["codec"], path).to_dict()
         data.setdefault("runs", [])
         data["parts"] = {}
         data["digest"] = manifest_digest(data)
@@ -241,7 +244,8 @@ class Store:
         """The codec of a compact sweep dataset (:mod:`surrogate.data.codec`), None for a
         dataset stored as written (float lists)."""
         recorded = self.manifest.get("codec")
-        return None if recorded is None else _codec_from(recorded, self.path / MANIFEST_NAME)
+        return None if recorded is None else SweepCodec.from_record(recorded,
+                                                                    self.path / MANIFEST_NAME)
 
     @property
     def stored_schema(self) -> pa.Schema:
@@ -366,7 +370,8 @@ class Store:
         entry = part_entry(tmp)
         if errors is not None:
             entry["codec_error"] = dict(errors)
-            _note_codec_error(self.manifest["codec"], errors)
+            record = self.manifest["codec"]
+            record["max_error"] = worst_errors(record.get("max_error") or {}, errors)
         self.manifest.setdefault("parts", {})[final.name] = entry
         self.save_manifest()  # the commit point: the part belongs to the dataset from here on
         os.replace(tmp, final)
@@ -481,41 +486,6 @@ class Store:
         return {"rows": len(t["status"]), "ok": t["status"].count("ok"),
                 "failed": t["status"].count("failed"), "parts": len(self.parts()),
                 "by_source": by_source}
-
-
-def _codec_from(recorded: Any, where: Path) -> SweepCodec:
-    if not isinstance(recorded, Mapping):
-        raise DatasetError(str(where), f"{where}: codec = {recorded!r} is not a codec record")
-    try:
-        return SweepCodec.from_dict(recorded)
-    except (CodecError, KeyError, TypeError) as err:
-        raise DatasetError(str(where), f"{where}: codec: {err}") from None
-
-
-def _note_codec_error(record: dict[str, Any], errors: Mapping[str, float]) -> None:
-    """Keep the dataset's largest codec error per column in its ``codec`` record."""
-    worst = record.setdefault("max_error", {})
-    for name, err in errors.items():
-        worst[name] = max(float(worst.get(name, 0.0)), float(err))
-
-
-def rows_to_table(rows: Sequence[Mapping[str, Any]], schema: pa.Schema) -> pa.Table:
-    """Arrow table from row dicts, with exactly ``schema`` (unknown keys are an error)."""
-    names = set(schema.names)
-    for i, row in enumerate(rows):
-        extra = set(row) - names
-        if extra:
-            raise DatasetError("row", f"row {i} has unknown columns {sorted(extra)}")
-    cols = {name: [_py(row.get(name)) for row in rows] for name in schema.names}
-    return pa.table(cols, schema=schema)
-
-
-def _py(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
 
 
 def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:

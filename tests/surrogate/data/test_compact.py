@@ -336,3 +336,13 @@ def test_merge_refuses_compact_inputs_of_other_codec_parameters(tmp_path):
     with pytest.raises(DatasetError, match="different codec parameters"):
         merge_datasets(tmp_path / "m", [a, b])
     assert not (tmp_path / "m").exists()
+
+
+def test_a_codec_for_a_single_frequency_space_is_refused(tmp_path):
+    from synthetic import SPACE as SINGLE
+
+    from surrogate.data.space import space_from_dict
+
+    with pytest.raises(DatasetError, match="only sweep datasets"):
+        Store.create(tmp_path / "d", space_from_dict(SINGLE), codec=SweepCodec().to_dict())
+    assert not (tmp_path / "d").exists()
