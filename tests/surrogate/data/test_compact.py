@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from test_sweep_data import _dataset, fake_sweep
 
 from hapticrom.cli import main
@@ -111,20 +114,46 @@ def test_the_documented_pandas_recipe_gives_the_stores_arrays(tmp_path, doc):
 # ------------------------------------------------------------------ damage and tampering
 
 
-def test_a_damaged_compressed_part_is_refused_by_name(tmp_path, capsys):
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory) -> Path:
+    return _dataset(tmp_path_factory.mktemp("compact") / "d", n=6)
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(which=st.integers(0, 1), at=st.floats(0.0, 1.0), length=st.integers(1, 64),
+       mask=st.integers(1, 255))
+def test_a_damaged_compressed_part_is_refused_by_name(pristine, tmp_path, which, at, length,
+                                                      mask):
+    path = tmp_path / "work"
+    shutil.rmtree(path, ignore_errors=True)
+    shutil.copytree(pristine, path)
+    part = sorted(path.glob("part-*.parquet"))[which]
+    data = bytearray(part.read_bytes())
+    start = int(at * (len(data) - length))
+    data[start:start + length] = bytes(b ^ mask for b in data[start:start + length])
+    part.write_bytes(bytes(data))
+    before = _bytes(path)
+    with pytest.raises(DatasetError, match=part.name):
+        Store.open(path)
+    problems = validate_dataset(path)
+    assert problems and all(part.name in p for p in problems), problems
+    with pytest.raises(DatasetError, match=part.name):
+        compact_dataset(path, tmp_path / "out")
+    assert _bytes(path) == before and not (tmp_path / "out").exists()
+
+
+def test_validate_and_info_exit_2_naming_a_damaged_part(tmp_path, capsys):
     path = _dataset(tmp_path / "d", n=6)
     part = sorted(path.glob("part-*.parquet"))[1]
     data = bytearray(part.read_bytes())
     mid = len(data) // 2
     data[mid:mid + 64] = bytes(b ^ 0xA5 for b in data[mid:mid + 64])
     part.write_bytes(bytes(data))
-    with pytest.raises(DatasetError, match=part.name):
-        Store.open(path)
-    problems = validate_dataset(path)
-    assert problems and all(part.name in p for p in problems), problems
     assert main(["dataset", "validate", str(path)]) == 2
     assert part.name in capsys.readouterr().out
     assert main(["dataset", "info", str(path)]) == 2
+    assert part.name in capsys.readouterr().err
 
 
 def test_steps_coarser_than_the_bound_fail_validate_by_part_and_column(tmp_path, capsys):
