@@ -439,15 +439,28 @@ def print_table(res: dict[str, Any]) -> None:
         print(f"  {rows:6d} rows a part: {kb:6.2f} kB a design")
 
 
+def print_markdown(res: dict[str, Any]) -> None:
+    """The table as docs/datasets.md shows it."""
+    print("| form | kB/design | largest error | encode ms/1000 | decode ms/1000 |")
+    print("|---|---|---|---|---|")
+    for r in res["forms"]:
+        flag = " (above the bound)" if r["max_error"] > res["bound"] else ""
+        print(f"| {r['form']} | {r['kB_per_design']:.2f} | {r['max_error']:.2e}{flag} | "
+              f"{r['encode_ms_per_1000']:,.0f} | {r['decode_ms_per_1000']:,.0f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("dataset")
     ap.add_argument("--rows", type=int, default=None, help="first N ok rows only")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--markdown", action="store_true", help="also print the markdown table")
     args = ap.parse_args()
     res = run(args.dataset, args.rows, args.repeat)
     print_table(res)
+    if args.markdown:
+        print_markdown(res)
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=1))
 
