@@ -106,6 +106,11 @@ def _parquet(table: pa.Table, **kw: Any) -> bytes:
     return buf.getvalue()
 
 
+def _leaves(names: list[str]) -> list[str]:
+    """Parquet's paths of the values of list columns (where encodings apply)."""
+    return [f"{n}.list.element" for n in names]
+
+
 def _read(data: bytes) -> pa.Table:
     return pq.read_table(io.BytesIO(data))
 
@@ -156,7 +161,7 @@ def plain_float32(fixed: bool, bss: bool, level: int | None) -> Form:
         if bss:
             names = [c for c in t.column_names if c.startswith("sweep_")
                      and pa.types.is_fixed_size_list(t.schema.field(c).type)]
-            kw.update(use_byte_stream_split=names, use_dictionary=[
+            kw.update(use_byte_stream_split=_leaves(names), use_dictionary=[
                 c for c in t.column_names if c not in names])
         return _parquet(t, **kw)
 
@@ -181,7 +186,7 @@ def scaled(kind: str, level: int = 9) -> Form:
             pa.array(scale.reshape(-1)), scale.shape[1]))
         names = [c for c in t.column_names if c.startswith("sweep_") and "_u" in c]
         return _parquet(t, compression="zstd", compression_level=level,
-                        use_byte_stream_split=names if kind == "float16" else False,
+                        use_byte_stream_split=_leaves(names) if kind == "float16" else False,
                         use_dictionary=[c for c in t.column_names if c not in names])
 
     def dec(data: bytes, shape: tuple[int, ...]) -> np.ndarray:
@@ -208,9 +213,9 @@ def quantised(predictor: str, bss: bool, level: int, edge_from_profile: bool = F
         if edge_from_profile:
             q[:, :, 1] -= q[:, :, 2]
         r = np.diff(q, axis=1, prepend=0)
-        if predictor == "f2":
+        for _ in range({"f2": 1, "f3": 2}.get(predictor, 0)):
             r = np.diff(r, axis=1, prepend=0)
-        elif predictor == "lorenzo":
+        if predictor == "lorenzo":
             r[:, :, 2:] = np.diff(r[:, :, 2:], axis=2, prepend=0)
         return r.astype(np.int16), step
 
@@ -232,7 +237,8 @@ def quantised(predictor: str, bss: bool, level: int, edge_from_profile: bool = F
             pa.array(step.reshape(-1)), step.shape[1]))
         names = [c for c in t.column_names if c.startswith("sweep_") and "_u" in c]
         return _parquet(t, compression="zstd", compression_level=level,
-                        use_byte_stream_split=names if bss else False,
+                        column_encoding=dict.fromkeys(_leaves(names), "BYTE_STREAM_SPLIT")
+                        if bss else None,
                         use_dictionary=[c for c in t.column_names if c not in names])
 
     def dec(data: bytes, shape: tuple[int, ...]) -> np.ndarray:
@@ -251,7 +257,7 @@ def quantised(predictor: str, bss: bool, level: int, edge_from_profile: bool = F
             r = _unlists(t, n, n_f, L)
         if predictor == "lorenzo":
             r[:, :, 2:] = np.cumsum(r[:, :, 2:], axis=2)
-        if predictor == "f2":
+        for _ in range({"f2": 1, "f3": 2}.get(predictor, 0)):
             r = np.cumsum(r, axis=1)
         q = np.cumsum(r, axis=1)
         if edge_from_profile:
@@ -259,7 +265,7 @@ def quantised(predictor: str, bss: bool, level: int, edge_from_profile: bool = F
         return (q * step[:, None, :, None]).astype(np.float32)
 
     what = {"f": "1st difference in f", "f2": "2nd difference in f",
-            "lorenzo": "Lorenzo (f, distance)"}[predictor]
+            "f3": "3rd difference in f", "lorenzo": "Lorenzo (f, distance)"}[predictor]
     extra = (", edge - profile[0]" if edge_from_profile else "") + \
         (", no scene_json" if drop_scene else "")
     store = "Blosc2 bytedelta+zstd 9" if lib == "blosc2" else \
@@ -353,7 +359,7 @@ def forms() -> list[Form]:
             quantised("lorenzo", False, 9), quantised("lorenzo", False, 19),
             quantised("f", False, 9, edge_from_profile=True),
             quantised("f", False, 9, edge_from_profile=True, drop_scene=True),
-            quantised("f", False, 9, lib="blosc2")]
+            quantised("f", False, 9, lib="blosc2"), quantised("f3", False, 9, lib="blosc2")]
     out += [zfp_form(TOL), zfp_form(TOL / 2), blosc2_trunc(12)]
     out += [store_codec(2), store_codec(4), store_codec(level=9), store_codec()]
     return out
