@@ -448,7 +448,8 @@ class Store:
                                f"not decode: {err}") from None
 
     def read(self, columns: Sequence[str] | None = None) -> Any:
-        """All rows as a pandas DataFrame (same as ``pandas.read_parquet(DIR)``)."""
+        """All rows as a pandas DataFrame (:meth:`read_table`: for a dataset without a codec
+        the same as ``pandas.read_parquet`` of its parts; a compact one's lists decoded)."""
         return self.read_table(columns).to_pandas()
 
     def keys(self) -> tuple[set[tuple[str, str]], dict[int, str]]:
