@@ -356,6 +356,7 @@ def forms() -> list[Form]:
     out += [plain_float32(True, True, lv) for lv in (3, 9, 19)]
     out += [scaled("float16"), scaled("int16")]
     out += [quantised("f", False, 9), quantised("f", True, 9), quantised("f2", False, 9),
+            quantised("f2", False, 19),
             quantised("lorenzo", False, 9), quantised("lorenzo", False, 19),
             quantised("f", False, 9, edge_from_profile=True),
             quantised("f", False, 9, edge_from_profile=True, drop_scene=True),
