@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from fieldspec import FieldError
 from surrogate.data.columns import COMPONENTS
 from surrogate.data.errors import DatasetError
 
@@ -77,8 +78,9 @@ _F32_EPS = 2.0 ** -24
 _INT16 = np.iinfo(np.int16).max
 
 
-class CodecError(ValueError):
-    """Values the codec cannot store (non-finite, ragged, or a damaged stored part)."""
+class CodecError(FieldError):
+    """Values the codec cannot store (non-finite, ragged, or a damaged stored part), or codec
+    parameters out of range; ``field`` names the column or the parameter."""
 
 
 def worst_errors(*errors: Mapping[str, float]) -> dict[str, float]:
@@ -113,16 +115,19 @@ class SweepCodec:
         for name in ("tolerance", "bound"):
             v = getattr(self, name)
             if not (isinstance(v, float | int) and math.isfinite(v) and 0 < v <= 0.01):
-                raise CodecError(f"codec.{name} = {v!r}: allowed 0 < {name} <= 0.01")
+                raise CodecError(f"codec.{name}",
+                                 f"codec.{name} = {v!r}: allowed 0 < {name} <= 0.01")
         if self.tolerance >= self.bound:
-            raise CodecError(f"codec.tolerance = {self.tolerance!r}: allowed below the bound "
-                             f"{self.bound!r} (float32 rounding adds to it)")
+            raise CodecError("codec.tolerance", f"codec.tolerance = {self.tolerance!r}: "
+                             f"allowed below the bound {self.bound!r} (float32 rounding adds "
+                             "to it)")
         if isinstance(self.order, bool) or self.order not in range(0, 5):
-            raise CodecError(f"codec.order = {self.order!r}: allowed 0, 1, 2, 3, 4")
+            raise CodecError("codec.order", f"codec.order = {self.order!r}: allowed 0, 1, 2, 3, 4")
         lowest = 2 ** self.order / (2.0 * (_INT16 - 2 ** self.order))
         if self.tolerance < lowest:  # |difference| <= 2**order * (1 / (2 tolerance) + 1)
-            raise CodecError(f"codec.tolerance = {self.tolerance!r}: codes of order "
-                             f"{self.order} would not fit int16 (allowed >= {lowest:.3g})")
+            raise CodecError("codec.tolerance", f"codec.tolerance = {self.tolerance!r}: "
+                             f"codes of order {self.order} would not fit int16 (allowed >= "
+                             f"{lowest:.3g})")
 
     # ---- description
 
@@ -132,17 +137,18 @@ class SweepCodec:
         (the manifest) for a record that is not one this version reads."""
         try:
             if not isinstance(recorded, Mapping):
-                raise CodecError(f"{recorded!r} is not a codec record")
+                raise CodecError("codec", f"{recorded!r} is not a codec record")
             return cls.from_dict(recorded)
-        except (CodecError, KeyError, TypeError) as err:
+        except (ValueError, KeyError, TypeError) as err:  # CodecError is a ValueError
             raise DatasetError(str(where), f"{where}: codec: {err}") from None
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> SweepCodec:
         """The codec a manifest records; :class:`CodecError` for another codec or version."""
         if d.get("name") != CODEC_NAME or d.get("version") != CODEC_VERSION:
-            raise CodecError(f"codec {d.get('name')!r} version {d.get('version')!r} is not "
-                             f"known (this version reads {CODEC_NAME!r} {CODEC_VERSION})")
+            raise CodecError("codec", f"codec {d.get('name')!r} version {d.get('version')!r} "
+                             f"is not known (this version reads {CODEC_NAME!r} "
+                             f"{CODEC_VERSION})")
         return cls(tolerance=float(d["tolerance"]), bound=float(d["bound"]),
                    order=d["order"])
 
@@ -214,7 +220,7 @@ class SweepCodec:
         for _ in range(self.order):
             diff = np.diff(diff, axis=1, prepend=0)
         if np.abs(diff).max(initial=0) > _INT16:  # cannot happen (checked in __post_init__)
-            raise CodecError("codes do not fit int16")
+            raise CodecError("codec", "codes do not fit int16")
         decoded = _decode_codes(diff, step, self.order)
         errors = _errors(decoded, u)
         columns = _code_arrays(diff, step, valid, n_f, L)
@@ -230,7 +236,7 @@ class SweepCodec:
         if not present:
             return stored
         if STEP_COLUMN not in stored.column_names:
-            raise CodecError(f"{STEP_COLUMN} missing: the codes cannot be decoded")
+            raise CodecError(STEP_COLUMN, f"{STEP_COLUMN} missing: the codes cannot be decoded")
         step, valid = _steps(stored)
         n, L = step.shape
         arrays: dict[str, pa.Array] = {}
@@ -240,8 +246,9 @@ class SweepCodec:
             q = _codes(stored, code_column(name), valid, where, L)
             bands.add(q.shape[2])
             if len(bands) > 1:
-                raise CodecError(f"{code_column(name)}: list lengths give {q.shape[2]} "
-                                 f"frequencies, other code columns {min(bands - {q.shape[2]})}")
+                raise CodecError(code_column(name), f"{code_column(name)}: list lengths give "
+                                 f"{q.shape[2]} frequencies, other code columns "
+                                 f"{min(bands - {q.shape[2]})}")
             for _ in range(self.order):
                 q = np.cumsum(q, axis=2)
             u = q * _where_steps(step, where).astype(float)[:, :, None]   # (n, locs, n_f)
@@ -305,18 +312,19 @@ def _gather(table: pa.Table) -> tuple[np.ndarray, np.ndarray, int]:
     nulls = np.stack([np.asarray(table.column(c).is_null(), dtype=bool) for c in ARRAY_COLUMNS])
     valid = ~nulls.any(axis=0)
     if np.any(nulls.any(axis=0) & ~nulls.all(axis=0)):
-        raise CodecError("a row has some sweep lists and not others")
+        raise CodecError("rows", "a row has some sweep lists and not others")
     sizes = {}
     for where in WHERE:
         lengths = {int(v) for c in ARRAY_COLUMNS if c.split("_")[1] == where
                    for v in _list_values(table.column(c))[1][valid]}
         if len(lengths) > 1:
-            raise CodecError(f"sweep_{where}_* lists of different lengths {sorted(lengths)}")
+            raise CodecError(f"sweep_{where}", f"sweep_{where}_* lists of different lengths "
+                             f"{sorted(lengths)}")
         sizes[where] = lengths.pop() if lengths else 0
     n_f = sizes["center"]
     if sizes["edge"] != n_f or (n_f and sizes["profile"] % n_f):
-        raise CodecError(f"sweep list lengths centre {n_f}, edge {sizes['edge']}, profile "
-                         f"{sizes['profile']} do not fit one band")
+        raise CodecError("sweep_profile", f"sweep list lengths centre {n_f}, edge "
+                         f"{sizes['edge']}, profile {sizes['profile']} do not fit one band")
     n_p = sizes["profile"] // n_f if n_f else 0
     u = np.zeros((n, n_f, 2 + n_p, 6))
     k = 0
@@ -332,7 +340,7 @@ def _gather(table: pa.Table) -> tuple[np.ndarray, np.ndarray, int]:
     if not np.all(np.isfinite(u)):
         bad = [c for i, c in enumerate(ARRAY_COLUMNS) if not np.all(np.isfinite(
             u[:, :, _where_slice(c.split('_')[1], 2 + n_p), i % 6]))]
-        raise CodecError(f"non-finite values in {', '.join(bad)}")
+        raise CodecError(bad[0], f"non-finite values in {', '.join(bad)}")
     return u, valid, n_f
 
 
@@ -386,14 +394,15 @@ def _steps(stored: pa.Table) -> tuple[np.ndarray, np.ndarray]:
     valid = ~np.asarray(arr.is_null(), dtype=bool)
     L = {int(v) for v in lengths[valid]}
     if len(L) > 1 or (L and min(L) < 3):
-        raise CodecError(f"{STEP_COLUMN}: lists of lengths {sorted(L)} (need 2 + n_p, equal)")
+        raise CodecError(STEP_COLUMN, f"{STEP_COLUMN}: lists of lengths {sorted(L)} (need "
+                         "2 + n_p, equal)")
     width = L.pop() if L else 3
     step = np.zeros((stored.num_rows, width), dtype=np.float32)
     vals = np.asarray(arr.filter(pa.array(valid)).flatten().to_numpy(zero_copy_only=False),
                       dtype=np.float32)
     step[valid] = vals.reshape(-1, width)
     if not (np.all(np.isfinite(step)) and np.all(step >= 0)):
-        raise CodecError(f"{STEP_COLUMN}: steps must be finite and >= 0")
+        raise CodecError(STEP_COLUMN, f"{STEP_COLUMN}: steps must be finite and >= 0")
     return step, valid
 
 
@@ -402,11 +411,11 @@ def _codes(stored: pa.Table, column: str, valid: np.ndarray, where: str,
     """Differences (n, locations of ``where``, n_f) of one code column."""
     arr, lengths = _list_values(stored.column(column))
     if not np.array_equal(~np.asarray(arr.is_null(), dtype=bool), valid):
-        raise CodecError(f"{column}: null where {STEP_COLUMN} is not (or the reverse)")
+        raise CodecError(column, f"{column}: null where {STEP_COLUMN} is not (or the reverse)")
     width = 1 if where != "profile" else L - 2
     ok = lengths[valid]
     if ok.size and (np.any(ok != ok[0]) or ok[0] % width):
-        raise CodecError(f"{column}: list lengths {sorted(set(ok.tolist()))[:4]} do not "
+        raise CodecError(column, f"{column}: list lengths {sorted(set(ok.tolist()))[:4]} do not "
                          f"fit {width} location(s)")
     n_f = int(ok[0]) // width if ok.size else 0
     q = np.zeros((stored.num_rows, width, n_f), dtype=np.int64)

@@ -30,6 +30,7 @@ import pyarrow as pa
 
 from surrogate.data.codec import SweepCodec
 from surrogate.data.errors import DatasetError
+from surrogate.data.inspect import validate_dataset
 from surrogate.data.integrity import part_problems
 from surrogate.data.store import Store, utc_now
 
@@ -134,8 +135,6 @@ def _build(source: Store, tmp: Path, codec: SweepCodec, rows_per_part: int) -> S
     with new.lock():
         for meta, table in _groups(source, rows_per_part):
             new.write_part(table, meta)
-    from surrogate.data.inspect import validate_dataset  # inspect imports the store, too
-
     problems = validate_dataset(tmp)
     if problems:  # the source was valid: a codec fault, never stored
         raise DatasetError("out", f"the compact form failed validation, nothing written: "

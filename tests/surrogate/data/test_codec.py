@@ -88,7 +88,7 @@ def test_round_trip_within_the_tolerance_and_the_errors_recorded(seed, n, n_f, n
     assert back.column("sample_index").to_pylist() == list(range(n))
     measured = _column_errors(_arrays(back, n_f), u)
     assert measured == pytest.approx(recorded, abs=1e-12)
-    assert max(recorded.values()) <= codec.tolerance * (1 + 1e-6)
+    assert max(recorded.values()) <= codec.tolerance + 2.0**-23  # + float32 rounding
     proven = codec.proven(stored)
     assert all(recorded[c] <= proven[c] <= BOUND for c in ARRAY_COLUMNS)
     if zero_location:
