@@ -12,8 +12,8 @@ step chosen per row and location (location: the centre, the edge, each profile d
   ``tolerance * M`` (default 2.5e-4 M; the bound is 3e-4 M, which leaves room for float32);
 * codes ``q = round(u / step)`` (|q| <= 1 / (2 tolerance)), stored as their differences of
   order ``order`` (default 3) along frequency: the response is smooth in frequency, so these
-  are small integers (entropy about 4 bits on the default sweep set) that Parquet's zstd
-  packs into about 6.5 bits each (``bench/bench_codec.py`` compares the orders).
+  are small integers (order-0 entropy 4.2 bits on the first real designs) that Parquet's zstd
+  packs into about 5.5 bits each (``bench/bench_codec.py`` compares the orders).
 
 Stored columns (everything else in the row is stored as written):
 
@@ -69,8 +69,8 @@ PARTS = ("re", "im")
 #: The 18 float32 list columns of a sweep row, in (where, component, part) order.
 ARRAY_COLUMNS = tuple(f"sweep_{w}_u{c}_{p}_um" for w in WHERE for c in COMPONENTS for p in PARTS)
 STEP_COLUMN = "sweep_step_um"
-#: Order of the differences along frequency (measured on the default sweep set: 1 -> 2 -> 3
-#: shrink the codes 12.3 -> 9.0 -> 8.3 kB a design; ``bench/bench_codec.py``).
+#: Order of the differences along frequency (whole rows of the first 32 designs of the sweep
+#: test set at zstd 19: order 2 8.07, 3 7.38, 4 7.67 kB a design; ``bench/bench_codec.py``).
 ORDER = 3
 #: zstd level of the parts.
 ZSTD_LEVEL = 19
