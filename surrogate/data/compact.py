@@ -5,8 +5,9 @@ sweep dataset ``src`` (float32 lists, the form written before :mod:`surrogate.da
 sweep lists stored as codes. Everything else carries over: the manifest's space, sampling,
 solver history and runs (``generate`` extends ``out`` as it would ``src``), every row's
 provenance; the manifest adds ``compacted_from`` (the source's path, manifest digest, rows,
-parts and bytes). The rows of consecutive source parts written by one solver are cut into parts
-of ``rows_per_part`` rows (every Parquet part carries about 15 kB of footer: parts of a few rows,
+parts and bytes). The rows of consecutive source parts written by one solver (version and
+fingerprint; their git revisions listed in the new part's metadata) are cut into parts of
+``rows_per_part`` rows (every Parquet part carries about 15 kB of footer: parts of a few rows,
 as a generation flushed every few seconds writes them, would cost more than their rows).
 
 Atomic: the new dataset is built and validated in ``.OUT.compact-PID`` beside ``out`` and
@@ -32,6 +33,7 @@ from surrogate.data.codec import SweepCodec
 from surrogate.data.errors import DatasetError
 from surrogate.data.inspect import validate_dataset
 from surrogate.data.integrity import part_problems
+from surrogate.data.provenance import solver_key
 from surrogate.data.store import Store, utc_now
 
 __all__ = ["compact_dataset"]
@@ -144,9 +146,12 @@ def _build(source: Store, tmp: Path, codec: SweepCodec, rows_per_part: int) -> S
 
 def _groups(source: Store, rows_per_part: int) -> Iterator[tuple[dict[str, Any], pa.Table]]:
     """(part metadata, rows) of the new parts: the rows of consecutive source parts with the
-    same source and solver, in order, cut into parts of ``rows_per_part`` rows (the last
-    of each run of parts shorter)."""
+    same source and solver (:func:`surrogate.data.provenance.solver_key`: version and
+    fingerprint; the git revisions the source parts record are kept in the metadata), in
+    order, cut into parts of ``rows_per_part`` rows (the last of each run of parts shorter)."""
     key: Any = None
+    solver: dict[str, Any] | None = None
+    revisions: list[str] = []
     buffer: list[pa.Table] = []
 
     def emit(everything: bool) -> Iterator[tuple[dict[str, Any], pa.Table]]:
@@ -156,18 +161,22 @@ def _groups(source: Store, rows_per_part: int) -> Iterator[tuple[dict[str, Any],
             return
         start = 0
         while rows.num_rows - start >= (1 if everything else rows_per_part):
-            yield ({"source": key[0], "solver": key[1], "written": utc_now()},
-                   rows.slice(start, rows_per_part))
+            yield ({"source": key[0], "solver": solver, "git_revisions": list(revisions),
+                    "written": utc_now()}, rows.slice(start, rows_per_part))
             start += rows_per_part
         if start < rows.num_rows:
             buffer.append(rows.slice(start))
 
     for part in source.parts():
         meta = source.part_metadata(part)
-        this = (meta.get("source"), meta.get("solver"))
+        own = meta.get("solver") if isinstance(meta.get("solver"), dict) else None
+        this = (meta.get("source"), None if own is None else solver_key(own))
         if this != key:
             yield from emit(everything=True)
-            key = this
+            key, solver, revisions = this, own, []
+        revision = (own or {}).get("git_revision")
+        if revision and revision not in revisions:
+            revisions.append(revision)
         buffer.append(source.read_part(part).replace_schema_metadata(None))
         yield from emit(everything=False)
     yield from emit(everything=True)

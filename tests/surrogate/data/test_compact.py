@@ -43,9 +43,9 @@ def _save_manifest(path: Path, m: dict) -> None:
     (path / MANIFEST_NAME).write_text(json.dumps(m))
 
 
-def _rewrite_part(path: Path, change) -> str:
-    """Apply ``change`` to the stored table of the first part, record it consistently."""
-    part = sorted(path.glob("part-*.parquet"))[0]
+def _rewrite_part(path: Path, change, index: int = 0) -> str:
+    """Apply ``change`` to the stored table of a part, record it consistently."""
+    part = sorted(path.glob("part-*.parquet"))[index]
     t = pq.read_table(part)
     pq.write_table(change(t), part)
     m = _manifest(path)
@@ -377,3 +377,33 @@ def test_a_codec_for_a_single_frequency_space_is_refused(tmp_path):
     with pytest.raises(DatasetError, match="only sweep datasets"):
         Store.create(tmp_path / "d", space_from_dict(SINGLE), codec=SweepCodec().to_dict())
     assert not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize("other_solver", [False, True])
+def test_compact_joins_the_parts_of_one_solver_and_keeps_their_revisions(tmp_path,
+                                                                        other_solver):
+    src = _dataset(tmp_path / "old", n=6, compact=False)
+    m = _manifest(src)
+    solvers = [{**m["solver"], "git_revision": "a" * 40},
+               {**m["solver"], "git_revision": "b" * 40,
+                **({"fingerprint": "f" * 64} if other_solver else {})}]
+    if other_solver:  # a second solver the manifest records, as --allow-solver-change does
+        m["solver_history"].append(solvers[1])
+        _save_manifest(src, m)
+    for i, solver in enumerate(solvers):
+        def with_solver(t: pa.Table, solver=solver) -> pa.Table:
+            meta = {"source": "hapticrom-fem", "solver": solver, "space_hash": m["space_hash"]}
+            return t.replace_schema_metadata({"hapticrom": json.dumps(meta)})
+
+        _rewrite_part(src, with_solver, index=i)
+    res = compact_dataset(src, tmp_path / "new")
+    new = Store.open(tmp_path / "new")
+    metas = [new.part_metadata(p) for p in new.parts()]
+    if other_solver:
+        assert res["parts_out"] == 2
+        assert [x["git_revisions"] for x in metas] == [["a" * 40], ["b" * 40]]
+        assert metas[1]["solver"]["fingerprint"] == "f" * 64
+    else:
+        assert res["parts_out"] == 1 and metas[0]["git_revisions"] == ["a" * 40, "b" * 40]
+    assert validate_dataset(tmp_path / "new") == []
+
