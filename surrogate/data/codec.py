@@ -13,7 +13,7 @@ step chosen per row and location (location: the centre, the edge, each profile d
 * codes ``q = round(u / step)`` (|q| <= 1 / (2 tolerance)), stored as their differences of
   order ``order`` (default 3) along frequency: the response is smooth in frequency, so these
   are small integers (order-0 entropy 4.2 bits on the first real designs) that Parquet's zstd
-  packs into about 5.5 bits each (``bench/bench_codec.py`` compares the orders).
+  packs into about 5.5 bits each (``bench/datasets/codec.py`` compares the orders).
 
 Stored columns (everything else in the row is stored as written):
 
@@ -70,7 +70,7 @@ PARTS = ("re", "im")
 ARRAY_COLUMNS = tuple(f"sweep_{w}_u{c}_{p}_um" for w in WHERE for c in COMPONENTS for p in PARTS)
 STEP_COLUMN = "sweep_step_um"
 #: Order of the differences along frequency (whole rows of the first 32 designs of the sweep
-#: test set at zstd 19: order 2 8.07, 3 7.38, 4 7.67 kB a design; ``bench/bench_codec.py``).
+#: test set at zstd 19: order 2 8.07, 3 7.38, 4 7.67 kB a design; ``bench/datasets/codec.py``).
 ORDER = 3
 #: zstd level of the parts.
 ZSTD_LEVEL = 19

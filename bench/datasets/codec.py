@@ -1,6 +1,6 @@
 """Storage of sweep datasets: bytes per design, largest error and speed of each candidate form.
 
-    python bench/bench_codec.py DATASET [--rows N] [--repeat 3] [--json out.json]
+    python bench/datasets/codec.py DATASET [--rows N] [--repeat 3] [--json out.json]
 
 DATASET is a sweep dataset (either form; :mod:`surrogate.data.store` decodes it) -- e.g. a copy
 of a set being generated. Every candidate stores the same rows (all columns: provenance,
@@ -42,7 +42,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from surrogate.data.codec import (  # noqa: E402
