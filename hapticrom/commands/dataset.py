@@ -1,10 +1,13 @@
-"""``hapticrom dataset info|validate|merge|seal``: inspect, check, combine and seal datasets.
+"""``hapticrom dataset info|validate|merge|seal|compact``: inspect, check, combine, seal and
+compact datasets.
 
 Exit codes (the policy of :mod:`hapticrom.cli`): ``validate`` exits 0 for a valid dataset and
 2 (bad input) with the list of problems; ``info`` exits 2 for a damaged or missing dataset,
 like every command given bad input. Files that are not part of a dataset are listed (``note:``)
 and ignored. ``seal`` records the part digests of a dataset written before hapticrom recorded
-them (after validating it); every reader refuses an unsealed dataset.
+them (after validating it); every reader refuses an unsealed dataset. ``compact`` re-encodes
+a sweep dataset stored as float32 lists into the compact form (:mod:`surrogate.data.compact`):
+a new dataset, written atomically; an existing ``--out`` only with ``--overwrite``.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ import json
 import sys
 from typing import Any
 
+from hapticrom.commands._args import positive_int
 from hapticrom.documents import dataset_info_document
 from hapticrom.outputs import check_not_input
 
@@ -22,7 +26,7 @@ def register(subparsers: Any) -> None:
     """Add the ``dataset`` sub-parser and its three sub-commands."""
     p = subparsers.add_parser("dataset", help="inspect, validate or merge datasets")
     sub = p.add_subparsers(dest="dataset_command", required=True,
-                           metavar="{info,validate,merge,seal}")
+                           metavar="{info,validate,merge,seal,compact}")
     info = sub.add_parser("info", help="summary of a dataset")
     info.add_argument("path")
     info.add_argument("--json", action="store_true", help="print JSON")
@@ -42,6 +46,16 @@ def register(subparsers: Any) -> None:
                           "they were recorded (validates it first)")
     seal.add_argument("path")
     seal.set_defaults(func=run_seal)
+    compact = sub.add_parser("compact", help="re-encode a sweep dataset into the compact form "
+                             "(a new dataset)")
+    compact.add_argument("src", help="sweep dataset stored as float32 lists")
+    compact.add_argument("--out", required=True, help="new dataset directory")
+    compact.add_argument("--overwrite", action="store_true",
+                         help="replace --out if it is a dataset (atomically)")
+    compact.add_argument("--rows-per-part", type=positive_int, default=1024,
+                         help="rows per Parquet part (default 1024; every part costs about "
+                         "15 kB of footer)")
+    compact.set_defaults(func=run_compact)
 
 
 def run_info(args: argparse.Namespace) -> int:
@@ -77,6 +91,12 @@ def format_info(info: dict[str, Any]) -> str:
         f"sources   {', '.join(f'{k}: {v}' for k, v in info['by_source'].items()) or '-'}",
         f"runs      {info['runs']} ({info['interrupted_runs']} interrupted)",
     ]
+    codec = info.get("codec")
+    if codec:
+        worst = codec.get("max_error")
+        lines.append(f"storage   compact: {codec['name']} v{codec['version']} (bound "
+                     f"{codec['bound']:g} of the band maximum), largest codec error "
+                     f"{'-' if worst is None else f'{worst:.2e}'}")
     if info.get("stray_files"):
         lines.append(f"note      ignored (not part of the dataset): "
                      f"{', '.join(info['stray_files'])}")
@@ -114,6 +134,20 @@ def run_merge(args: argparse.Namespace) -> int:
     res = merge_datasets(args.out, args.inputs, args.allow_mixed_solvers)
     print(f"{args.out}: {res['rows_out']} rows from {res['rows_in']} "
           f"({res['duplicates_dropped']} duplicates dropped), {res['parts']} parts")
+    return 0
+
+
+def run_compact(args: argparse.Namespace) -> int:
+    """Write the compact form of a sweep dataset."""
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
+    from surrogate.data.compact import compact_dataset
+
+    res = compact_dataset(args.src, args.out, overwrite=args.overwrite,
+                          rows_per_part=args.rows_per_part)
+    print(f"{args.out}: {res['rows']} rows in {res['parts_out']} parts, "
+          f"{res['bytes_out'] / 1e6:.2f} MB ({res['bytes_out'] / max(res['rows'], 1) / 1e3:.1f}"
+          f" kB a row; source {res['bytes_in'] / 1e6:.2f} MB in {res['parts_in']} parts); "
+          f"largest codec error {res['max_error']:.2e} of the band maximum")
     return 0
 
 

@@ -23,6 +23,10 @@ solver's 1e-3 error tolerance), frequency-major:
 * ``sweep_profile_u{c}_re_um`` / ``_im_um`` (list<float32>, n_f * n_p: entry i * n_p + j is
   frequency i at distance j; ``numpy.reshape(n_f, n_p)``);
 * ``sweep_error_estimate`` (the solver's relative error estimate) and ``sweep_full_solves``.
+
+These are the columns every reader gets; a compact dataset stores the float lists as integer
+codes (:mod:`surrogate.data.codec`, within 3e-4 of the band maximum at each location) and the
+store decodes them.
 """
 
 from __future__ import annotations
@@ -33,9 +37,11 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from surrogate.data.errors import DatasetError
+
 __all__ = ["COMPLEX_FIELDS", "COMPONENTS", "OUTPUT_FIELDS", "PROFILE_OUTPUTS",
            "PROVENANCE_FIELDS", "SWEEP_FIELDS", "arrow_schema", "complex_columns", "profile_matrix",
-           "recorded_schema", "sweep_arrays", "sweep_columns"]
+           "recorded_schema", "rows_to_table", "sweep_arrays", "sweep_columns"]
 
 #: Component names in the order of the solver's result arrays (U_r, U_z, U_t).
 COMPONENTS = ("r", "z", "t")
@@ -211,3 +217,22 @@ def profile_matrix(df: Any, grid_mm: Sequence[float],
         inside = (grid >= d.min()) & (grid <= d.max())
         out[i, inside] = np.interp(grid[inside], d, a)
     return out
+
+
+def rows_to_table(rows: Sequence[Mapping[str, Any]], schema: pa.Schema) -> pa.Table:
+    """Arrow table from row dicts, with exactly ``schema`` (unknown keys are an error)."""
+    names = set(schema.names)
+    for i, row in enumerate(rows):
+        extra = set(row) - names
+        if extra:
+            raise DatasetError("row", f"row {i} has unknown columns {sorted(extra)}")
+    cols = {name: [_py(row.get(name)) for row in rows] for name in schema.names}
+    return pa.table(cols, schema=schema)
+
+
+def _py(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value

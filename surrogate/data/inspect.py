@@ -13,6 +13,7 @@ import numpy as np
 import pyarrow as pa
 
 from fem.scene import SceneError, scene_from_dict, scene_hash
+from surrogate.data.codec import ARRAY_COLUMNS, CodecError, SweepCodec, worst_errors
 from surrogate.data.digests import check_parts, part_entry, stray_files
 from surrogate.data.errors import DatasetError
 from surrogate.data.integrity import manifest_problems, part_problems
@@ -49,7 +50,16 @@ def dataset_info(path: str | Path) -> dict[str, Any]:
         "stray_files": stray_files(store.path, m.get("parts") or {}),
         "runs": len(runs), "interrupted_runs": sum(1 for r in runs if r.get("finished") is None),
         "merged_from": m.get("merged_from"),
+        "codec": _codec_summary(m.get("codec")),
     }
+
+
+def _codec_summary(record: Any) -> dict[str, Any] | None:
+    """A compact dataset's codec parameters and its largest error over every column."""
+    if not isinstance(record, dict):
+        return None
+    keep = {k: record.get(k) for k in ("name", "version", "tolerance", "bound", "order")}
+    return {**keep, "max_error": max((record.get("max_error") or {}).values(), default=None)}
 
 
 def validate_dataset(path: str | Path, rehash: bool = False,
@@ -63,7 +73,10 @@ def validate_dataset(path: str | Path, rehash: bool = False,
     twice; generated rows have unique sample indices (unless merged); statuses are "ok" or
     "failed"; failed rows carry error text; generated ok rows have finite amplitudes and a
     profile on the manifest grid; parameter values lie in the space; each part's solver is
-    in the manifest history. ``rehash`` recomputes every sample_id from scene_json."""
+    in the manifest history. A compact sweep dataset (:mod:`surrogate.data.codec`): every
+    part's codes decode, its codec is the manifest's, and its codec error per column -- the
+    one recorded when it was written and the one its stored steps prove -- is within the
+    codec's bound. ``rehash`` recomputes every sample_id from scene_json."""
     store = Store.open(path, check=False)
     problems = [f"_manifest.json: {p}" for p in manifest_problems(store)]
     if any("section(s) are missing" in p or "not a valid space" in p for p in problems):
@@ -73,7 +86,7 @@ def validate_dataset(path: str | Path, rehash: bool = False,
     if notes is not None and check.strays:
         notes.append(f"ignored (not part of the dataset): {', '.join(check.strays)}")
     problems += part_problems(store)
-    schema = store.schema
+    schema = store.stored_schema
     tables = []
     for part in store.parts():
         if not part.exists():
@@ -87,6 +100,13 @@ def validate_dataset(path: str | Path, rehash: bool = False,
             problems.append(f"{part.name}: schema differs from the dataset schema")
             continue
         problems += _check_part_solver(store, part)
+        if store.codec is not None:
+            problems += _check_codec(store, part, t)
+            try:
+                t = store.decode_part(part, t)
+            except DatasetError as err:
+                problems.append(str(err))
+                continue
         tables.append(t.replace_schema_metadata(None))
     if not tables:
         return problems
@@ -104,6 +124,40 @@ def _check_part_solver(store: Store, part: Path) -> list[str]:
         return [f"{part.name}: written by solver {solver.get('version')} "
                 f"({solver.get('hash')}), which the manifest does not list"]
     return []
+
+
+def _check_codec(store: Store, part: Path, stored: pa.Table) -> list[str]:
+    """A compact part's codec against the manifest's, and its errors against the bound."""
+    codec = store.codec
+    assert codec is not None
+    name = part.name.removeprefix(".").removesuffix(".tmp")
+    own = store.part_metadata(part).get("codec")
+    if own != codec.part_record():
+        return [f"{name}: written with codec {own!r}, not the dataset's {codec.part_record()}"]
+    problems = []
+    recorded = (store.manifest.get("parts") or {}).get(name, {}).get("codec_error")
+    if not isinstance(recorded, dict) or set(recorded) != set(ARRAY_COLUMNS):
+        problems.append(f"{name}: the manifest records no codec error for every column")
+        recorded = {}
+    try:
+        proven = codec.proven(stored)
+    except CodecError as err:
+        return [*problems, f"{name}: its codes do not decode: {err}"]
+    for col in ARRAY_COLUMNS:
+        err = recorded.get(col)
+        if err is not None and not (isinstance(err, float | int) and 0 <= err <= codec.bound):
+            problems.append(f"{name}: {col}: codec error {err!r} recorded when it was written "
+                            f"is above the bound {codec.bound:g} (of the band maximum at the "
+                            "location)")
+        if proven[col] > codec.bound:
+            problems.append(f"{name}: {col}: its stored steps allow a codec error of "
+                            f"{proven[col]:.3g}, above the bound {codec.bound:g} (of the band "
+                            "maximum at the location)")
+        elif isinstance(err, float | int) and err > proven[col] * (1 + 1e-9):
+            problems.append(f"{name}: {col}: codec error {err:.3g} recorded, more than its "
+                            f"codes allow ({proven[col]:.3g}): the record or the part was "
+                            "edited")
+    return problems
 
 
 def _check_rows(store: Store, df: Any) -> list[str]:
@@ -184,7 +238,10 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
     Inputs must have the same parameter columns; a row present in several inputs (same
     source and sample_id) is kept once, an "ok" copy before a "failed" one. Different solver
     versions need ``allow_mixed_solvers``. Only a merge of datasets from one space can be
-    extended by ``generate``. Returns counts; validates everything before writing."""
+    extended by ``generate``. When an input is compact (:mod:`surrogate.data.codec`) the
+    union is: compact inputs' codes pass through unchanged (never rounded twice), float-list
+    inputs are encoded, and every part records, per column, the largest error of all inputs.
+    Returns counts; validates everything before writing."""
     if not inputs:
         raise DatasetError("inputs", "merge needs at least one input dataset")
     out = Path(out)
@@ -203,8 +260,13 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
         raise DatasetError("allow_mixed_solvers", f"the inputs were computed by different "
                            f"solvers ({listed}); allow_mixed_solvers (--allow-mixed-solvers) "
                            "merges anyway")
-    table = pa.concat_tables([s.read_table() for s in stores])
-    df = table.to_pandas()
+    codec = _merge_codec(stores)
+    errors = None
+    if codec is None:
+        table = pa.concat_tables([s.read_table() for s in stores])
+    else:
+        table, errors = _stored_union(stores, codec)
+    df = table.select(["source", "sample_id", "status"]).to_pandas()
     # lexsort: the last key is the primary one -> ok rows first, then input order
     order = np.lexsort((np.arange(len(df)), df["status"].ne("ok").to_numpy()))
     keep = ~df.iloc[order].duplicated(["source", "sample_id"]).to_numpy()
@@ -213,7 +275,9 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
     hashes = {s.manifest.get("space_hash") for s in stores}
     manifest = {k: v for k, v in first.manifest.items()
                 if k not in ("format", "schema_version", "created", "space", "space_hash",
-                             "columns", "runs", "updated")}
+                             "columns", "runs", "updated", "codec", "compacted_from")}
+    if codec is not None:
+        manifest["codec"] = codec.to_dict()
     manifest.update(solver_history=list(solvers.values()), merged_from=[
         {"path": str(s.path), "space_hash": s.manifest.get("space_hash"),
          "rows": s.counts()["rows"]} for s in stores])
@@ -226,9 +290,34 @@ def merge_datasets(out: str | Path, inputs: Sequence[str | Path],
         for start in range(0, max(merged.num_rows, 1), rows_per_part):
             chunk = merged.slice(start, rows_per_part)
             if chunk.num_rows:
-                new.write_part(chunk, {"source": "merge"})
+                new.write_part(chunk, {"source": "merge"}, encoded=errors)
     return {"rows_in": table.num_rows, "rows_out": merged.num_rows,
             "duplicates_dropped": table.num_rows - merged.num_rows, "parts": len(new.parts())}
+
+
+def _merge_codec(stores: Sequence[Store]) -> SweepCodec | None:
+    """The codec of a merge: the inputs' (one), None when no input is compact."""
+    codecs = {s.codec for s in stores if s.codec is not None}
+    if len(codecs) > 1:
+        raise DatasetError("inputs", f"the inputs are compact with different codec parameters "
+                           f"({', '.join(sorted(str(c) for c in codecs))}): not merged (their "
+                           "codes would be rounded a second time)")
+    return codecs.pop() if codecs else None
+
+
+def _stored_union(stores: Sequence[Store], codec: SweepCodec
+                  ) -> tuple[pa.Table, dict[str, float]]:
+    """Every input's rows in ``codec``'s stored form, and the largest error per column."""
+    tables, errors = [], [dict.fromkeys(ARRAY_COLUMNS, 0.0)]
+    for s in stores:
+        if s.codec is None:
+            table, own = codec.encode(s.read_table())
+        else:
+            table = s.read_stored()
+            own = s.manifest["codec"].get("max_error") or {}
+        tables.append(table.cast(codec.stored_schema(stores[0].schema)))
+        errors.append(own)
+    return pa.concat_tables(tables), worst_errors(*errors)
 
 
 def seal_dataset(path: str | Path) -> dict[str, Any]:

@@ -36,8 +36,10 @@ def outputs_summary(manifest: Mapping[str, Any], columns: list[str]) -> str:
     if band:
         f = band.get("frequency_hz") or []
         where = f"{f[0]:g}-{f[-1]:g} Hz" if f else "?"
+        stored = (f"stored as codes within {manifest['codec'].get('bound')} of the band "
+                  "maximum" if isinstance(manifest.get("codec"), Mapping) else "float32")
         return (f"complex sweeps: {len(f)} frequencies {where}, profile {len(grid)} points "
-                "(centre, edge, profile: r, z, t re/im float32)")
+                f"(centre, edge, profile: r, z, t re/im; {stored})")
     if "center_uz_re_um" in columns:
         return "magnitudes and complex amplitudes (centre, edge, profile: r, z, t re/im)"
     if "history_center_um" in columns and manifest.get("analysis_kind") == "transient":

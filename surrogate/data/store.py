@@ -8,11 +8,19 @@ Layout::
     DIR/part-000001.parquet     immutable data parts (zstd), written atomically
     DIR/.part-000002.parquet.tmp   a part being written (or left by a killed run)
 
+A sweep dataset written by this version is compact (the manifest's ``codec``,
+:mod:`surrogate.data.codec`): its parts store the sweep lists as integer codes, and every
+reader here gets back the float32 lists (:meth:`Store.read_table`); the manifest records, per
+part (``parts[NAME].codec_error``) and for the dataset (``codec.max_error``), the largest codec
+error per column measured when the part was written. A dataset without ``codec`` (every one
+written before) stores the lists as written, and stays so when extended.
+
 The dataset is the parts the manifest records (``parts``: rows, a digest of the rows and of
 the file, :mod:`surrogate.data.digests`); every reader (:meth:`Store.open`) checks them and
 refuses a dataset whose parts, rows or manifest do not match, naming the part. Any other file
 in the directory is a stray: reported and never read. Read it with pandas from the manifest's
-list (what :meth:`Store.read` returns)::
+list (what :meth:`Store.read` returns, for a dataset without a codec; a compact one's codes
+are decoded as ``docs/datasets.md`` shows)::
 
     m = json.load(open(f"{DIR}/_manifest.json"))
     df = pd.concat([pd.read_parquet(f"{DIR}/{name}") for name in sorted(m["parts"])])
@@ -46,11 +54,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from fieldspec.documents import read_json_file
+from surrogate.data.codec import CodecError, SweepCodec, worst_errors
 from surrogate.data.columns import (
     COMPLEX_FIELDS,
     OUTPUT_FIELDS,
@@ -58,6 +66,7 @@ from surrogate.data.columns import (
     arrow_schema,
     profile_matrix,
     recorded_schema,
+    rows_to_table,
 )
 from surrogate.data.digests import (
     PART_RE,
@@ -144,10 +153,15 @@ class Store:
         path = Path(path)
         if path.exists() and (not path.is_dir() or any(path.iterdir())):
             raise DatasetError(str(path), f"{path} exists and is not an empty directory")
+        if manifest.get("codec") is not None and space.band is None:
+            raise DatasetError("codec", "only sweep datasets (a space with a band) have a "
+                               "compact form")
         head = {"format": FORMAT, "schema_version": SCHEMA_VERSION, "created": utc_now(),
                 "space": space.to_dict(), "space_hash": space.space_hash(),
                 "columns": [{"name": f.name, "type": str(f.type)} for f in arrow_schema(space)]}
         data = {**head, **manifest}
+        if data.get("codec") is not None:  # the codec's parameters; errors come with parts
+            data["codec"] = SweepCodec.from_record(data["codec"], path).to_dict()
         data.setdefault("runs", [])
         data["parts"] = {}
         data["digest"] = manifest_digest(data)
@@ -221,9 +235,24 @@ class Store:
 
     @property
     def schema(self) -> pa.Schema:
-        """The Arrow schema every part must have: the columns the manifest records (a
-        dataset written before a column existed does not have it)."""
+        """The Arrow schema of the rows (what :meth:`read_table` returns): the columns the
+        manifest records (a dataset written before a column existed does not have it)."""
         return recorded_schema(self.space, self.manifest)
+
+    @property
+    def codec(self) -> SweepCodec | None:
+        """The codec of a compact sweep dataset (:mod:`surrogate.data.codec`), None for a
+        dataset stored as written (float lists)."""
+        recorded = self.manifest.get("codec")
+        return None if recorded is None else SweepCodec.from_record(recorded,
+                                                                    self.path / MANIFEST_NAME)
+
+    @property
+    def stored_schema(self) -> pa.Schema:
+        """The Arrow schema every part must have: :attr:`schema`, or its stored form when
+        the dataset has a codec."""
+        codec = self.codec
+        return self.schema if codec is None else codec.stored_schema(self.schema)
 
     def save_manifest(self) -> None:
         """Write the (modified) manifest atomically."""
@@ -288,10 +317,15 @@ class Store:
         return max(seqs, default=0) + 1
 
     def write_part(self, rows: Sequence[Mapping[str, Any]] | pa.Table,
-                   metadata: Mapping[str, Any] | None = None) -> Path:
+                   metadata: Mapping[str, Any] | None = None, *,
+                   encoded: Mapping[str, float] | None = None) -> Path:
         """Write ``rows`` (dicts keyed by column, missing columns are null; or an Arrow table
         with the dataset schema) as a new part, atomically. ``metadata`` goes into the
-        Parquet key-value metadata under ``hapticrom``. Call under :meth:`lock`."""
+        Parquet key-value metadata under ``hapticrom``. ``encoded``: ``rows`` is a table
+        already in the stored form of this dataset's codec (codes passed through, not rounded
+        again), with these largest errors per column. Call under :meth:`lock`."""
+        if encoded is not None:
+            return self._write_encoded(rows, metadata, encoded)
         if isinstance(rows, pa.Table):
             table = rows.replace_schema_metadata(None).cast(self.schema)
         else:
@@ -299,15 +333,46 @@ class Store:
             if later:
                 rows = [{k: v for k, v in r.items() if k not in later} for r in rows]
             table = rows_to_table(rows, self.schema)
-        meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
+        codec = self.codec
+        if codec is None:
+            meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash")}
+            return self._write(table, meta, {"compression": "zstd"}, None)
+        try:
+            stored, errors = codec.encode(table)
+        except CodecError as err:
+            raise DatasetError("rows", f"{self.path}: rows not stored: {err}") from None
+        return self._write_encoded(stored, metadata, errors)
+
+    def _write_encoded(self, table: pa.Table, metadata: Mapping[str, Any] | None,
+                       errors: Mapping[str, float]) -> Path:
+        codec = self.codec
+        if codec is None or not isinstance(table, pa.Table):
+            raise DatasetError("rows", f"{self.path}: encoded rows for a dataset without a "
+                               "codec, or not a table")
+        worst = max(errors.values(), default=0.0)
+        if worst > codec.bound:  # cannot happen with tolerance < bound; never store it
+            raise DatasetError("codec", f"{self.path}: codec error {worst:.3g} above its bound "
+                               f"{codec.bound:g}: rows not stored")
+        table = table.replace_schema_metadata(None).cast(self.stored_schema)
+        meta = {**(metadata or {}), "space_hash": self.manifest.get("space_hash"),
+                "codec": codec.part_record(), "codec_error": dict(errors)}
+        return self._write(table, meta, codec.parquet_options(table.schema), errors)
+
+    def _write(self, table: pa.Table, meta: Mapping[str, Any], options: Mapping[str, Any],
+               errors: Mapping[str, float] | None) -> Path:
         table = table.replace_schema_metadata({"hapticrom": json.dumps(meta, sort_keys=True)})
         seq = self._next_seq()
         final = self.path / f"part-{seq:06d}.parquet"
         tmp = self.path / f".{final.name}.tmp"
-        pq.write_table(table, tmp, compression="zstd")
+        pq.write_table(table, tmp, **options)
         with open(tmp, "rb") as fh:
             os.fsync(fh.fileno())
-        self.manifest.setdefault("parts", {})[final.name] = part_entry(tmp)
+        entry = part_entry(tmp)
+        if errors is not None:
+            entry["codec_error"] = dict(errors)
+            record = self.manifest["codec"]
+            record["max_error"] = worst_errors(record.get("max_error") or {}, errors)
+        self.manifest.setdefault("parts", {})[final.name] = entry
         self.save_manifest()  # the commit point: the part belongs to the dataset from here on
         os.replace(tmp, final)
         _fsync_dir(self.path)
@@ -328,9 +393,33 @@ class Store:
             raise DatasetError(str(part), f"cannot read part {part}: {err}") from None
 
     def read_table(self, columns: Sequence[str] | None = None) -> pa.Table:
-        """All rows as one Arrow table with the dataset schema. Reading every column checks
-        each part's rows against the digest the manifest recorded (:class:`DatasetError`
-        naming the part)."""
+        """All rows as one Arrow table with the dataset schema (a compact dataset's parts
+        decoded: :meth:`decode_part`). Reading every column checks each part's rows against
+        the digest the manifest recorded (:class:`DatasetError` naming the part)."""
+        codec = self.codec
+        stored = codec.stored_columns(columns) if codec is not None and columns else columns
+        tables = self._read_parts(stored)
+        if not tables:
+            schema = self.schema
+            if columns:
+                schema = pa.schema([schema.field(c) for c in columns])
+            return schema.empty_table()
+        if codec is not None:
+            tables = [self.decode_part(p, t) for p, t in zip(self.parts(), tables, strict=True)]
+            if columns:
+                tables = [t.select(list(columns)) for t in tables]
+        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+
+    def read_stored(self) -> pa.Table:
+        """All rows as the parts store them (a compact dataset's codes, not decoded), each
+        part checked against its recorded digest."""
+        tables = self._read_parts(None)
+        if not tables:
+            return self.stored_schema.empty_table()
+        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+
+    def _read_parts(self, columns: Sequence[str] | None) -> list[pa.Table]:
+        """Every part's stored columns; all of them checked against the recorded digests."""
         tables = [self.read_part(p, columns) for p in self.parts()]
         listed = self.manifest.get("parts")
         if columns is None and isinstance(listed, Mapping):
@@ -344,15 +433,23 @@ class Store:
                     raise DatasetError(str(part), f"{self.path}: refused: {name}: its bytes "
                                        "do not match the sha256 recorded when it was written "
                                        "(damaged or rewritten)")
-        if not tables:
-            schema = self.schema
-            if columns:
-                schema = pa.schema([schema.field(c) for c in columns])
-            return schema.empty_table()
-        return pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+        return tables
+
+    def decode_part(self, part: Path, stored: pa.Table) -> pa.Table:
+        """The rows of a compact part as the dataset schema types them; :class:`DatasetError`
+        naming the part when its codes do not decode (a damaged or edited part)."""
+        codec = self.codec
+        if codec is None:
+            return stored
+        try:
+            return codec.decode(stored, self.schema)
+        except CodecError as err:
+            raise DatasetError(str(part), f"{self.path}: refused: {part.name}: its codes do "
+                               f"not decode: {err}") from None
 
     def read(self, columns: Sequence[str] | None = None) -> Any:
-        """All rows as a pandas DataFrame (same as ``pandas.read_parquet(DIR)``)."""
+        """All rows as a pandas DataFrame (:meth:`read_table`: for a dataset without a codec
+        the same as ``pandas.read_parquet`` of its parts; a compact one's lists decoded)."""
         return self.read_table(columns).to_pandas()
 
     def keys(self) -> tuple[set[tuple[str, str]], dict[int, str]]:
@@ -392,25 +489,6 @@ class Store:
                 "by_source": by_source}
 
 
-def rows_to_table(rows: Sequence[Mapping[str, Any]], schema: pa.Schema) -> pa.Table:
-    """Arrow table from row dicts, with exactly ``schema`` (unknown keys are an error)."""
-    names = set(schema.names)
-    for i, row in enumerate(rows):
-        extra = set(row) - names
-        if extra:
-            raise DatasetError("row", f"row {i} has unknown columns {sorted(extra)}")
-    cols = {name: [_py(row.get(name)) for row in rows] for name in schema.names}
-    return pa.table(cols, schema=schema)
-
-
-def _py(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
-
-
 def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
     """The manifest entries of a new dataset over ``space`` computed by ``solver`` (a
     :func:`surrogate.data.provenance.solver_info` dict); pass them to :meth:`Store.create`."""
@@ -427,6 +505,7 @@ def new_manifest(space: Space, solver: Mapping[str, Any]) -> dict[str, Any]:
                           if "analysis.kind" in varied
                           else defaults.get("analysis", {}).get("kind")),
         "profile_grid_mm": None,
-        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)}}
+        **({"band": {**space.band.to_dict(), "frequency_hz": list(space.band.frequencies_hz)},
+            "codec": SweepCodec().to_dict()}  # sweeps are stored compact
            if space.band is not None else {}),
     }

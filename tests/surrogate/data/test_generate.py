@@ -62,6 +62,8 @@ def _toml(d: dict[str, Any]) -> str:
         lines += ["[[parameter]]"] + [f"{k} = {val(v)}" for k, v in p.items()]
     for c in d.get("constraint", []):
         lines += ["[[constraint]]"] + [f"{k} = {val(v)}" for k, v in c.items()]
+    if "band" in d:
+        lines += ["[band]"] + [f"{k} = {val(v)}" for k, v in d["band"].items()]
     return "\n".join(lines) + "\n"
 
 
@@ -235,8 +237,22 @@ def test_resume_refuses_other_space_or_solver(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------------- kill -9
 
 
-def test_kill_minus_9_and_resume(tmp_path: Path, space_file: Path) -> None:
-    out, n = tmp_path / "ds", 150
+#: A sweep space (compact storage) for the kill test: coarse sweeps of about 0.7 s each.
+SWEEP_SPACE: dict[str, Any] = {
+    "space": {"name": "gen-sweep-test", "seed": 11},
+    "base": {"mesh": SPACE["base"]["mesh"], "tissue": {"radius_mm": 30.0},
+             "output": {"profile_length_mm": 10.0, "profile_step_mm": 2.0}},
+    "parameter": SPACE["parameter"][:2],
+    "band": {"start": 100.0, "stop": 250.0, "step": 10.0},
+}
+
+
+@pytest.mark.parametrize("space, n", [(SPACE, 150), (SWEEP_SPACE, 14)],
+                         ids=["single-frequency", "sweep-compact"])
+def test_kill_minus_9_and_resume(tmp_path: Path, space: dict[str, Any], n: int) -> None:
+    space_file = tmp_path / "space.toml"
+    space_file.write_text(_toml(space))
+    out = tmp_path / "ds"
     cmd = [sys.executable, "-c", "import sys; from hapticrom.cli import main; "
            "sys.exit(main(sys.argv[1:]))", "generate", "--space", str(space_file), "--n",
            str(n), "--out", str(out), "--workers", "2", "--chunk", "1", "--flush-every", "2",
@@ -263,7 +279,7 @@ def test_kill_minus_9_and_resume(tmp_path: Path, space_file: Path) -> None:
     res = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
     df = _frame(out)
-    planned, _ = plan_samples(space_from_dict(SPACE), n)
+    planned, _ = plan_samples(space_from_dict(copy.deepcopy(space)), n)
     assert len(df) == n and df["sample_id"].is_unique
     assert df["sample_index"].tolist() == [p.index for p in planned]
     assert not list(out.glob(".*.tmp"))
@@ -271,8 +287,13 @@ def test_kill_minus_9_and_resume(tmp_path: Path, space_file: Path) -> None:
         assert pq.read_table(part).num_rows > 0
     for name, data in before.items():
         assert (out / name).read_bytes() == data
-    runs = Store.open(out).manifest["runs"]
+    store = Store.open(out)
+    runs = store.manifest["runs"]
     assert runs[0]["finished"] is None and runs[1]["todo"] == n - rows_before
+    if "band" in space:  # every part, before and after the kill, compact and its error known
+        assert store.codec is not None
+        assert all(max(e["codec_error"].values()) <= 2.5e-4 + 2.0**-23
+                   for e in store.manifest["parts"].values())
     assert validate_dataset(out) == []
 
 

@@ -77,10 +77,13 @@ def _space():
     return space_from_dict(SPACE, check_scenes=False)
 
 
-def _dataset(path: Path, n: int = 4) -> Path:
-    """A sweep dataset of n rows written the way generate writes them."""
+def _dataset(path: Path, n: int = 4, compact: bool = True) -> Path:
+    """A sweep dataset of n rows written the way generate writes them (``compact``: as
+    generate writes them now; else float32 lists, as before the codec)."""
     space = _space()
     manifest = {**new_manifest(space, solver_info(git=False)), "profile_grid_mm": GRID.tolist()}
+    if not compact:
+        del manifest["codec"]
     store = Store.create(path, space, **manifest)
     pts = space.points(0, n)
     rows = []
@@ -150,8 +153,19 @@ def test_the_shipped_sweep_space():
 # ------------------------------------------------------------------------------ storage
 
 
-def test_a_sweep_round_trips_through_the_store_as_float32(tmp_path):
-    path = _dataset(tmp_path / "d")
+def _location_error(got: np.ndarray, ref: np.ndarray) -> float:
+    """Largest error of a real or imaginary part relative to the band maximum magnitude at
+    its location, of (n_f, 3) or (n_f, n_p, 3) arrays."""
+    scale = np.sqrt(np.max(np.sum(np.abs(ref) ** 2, axis=-1), axis=0))  # per location
+    err = np.max(np.maximum(np.abs((got - ref).real), np.abs((got - ref).imag)), axis=(0, -1))
+    return float(np.max(err / scale))
+
+
+@pytest.mark.parametrize("compact, bound", [(False, 1e-7), (True, 2.51e-4)])
+def test_a_sweep_round_trips_through_the_store(tmp_path, compact, bound):
+    """Float32 lists to 6e-8 relative, the compact form within its tolerance (2.5e-4 of the
+    band maximum at the location)."""
+    path = _dataset(tmp_path / "d", compact=compact)
     store = Store.open(path, deep=True)
     schema = store.schema
     assert "center_amplitude_um" not in schema.names and "frequency_hz" not in schema.names
@@ -166,8 +180,7 @@ def test_a_sweep_round_trips_through_the_store_as_float32(tmp_path):
                            ("profile", want.profile)):
             got = sweep_arrays(row, where)
             assert got.shape == ref.shape
-            scale = np.abs(ref).max() * 1e6
-            assert np.abs(got - ref * 1e6).max() <= 1e-7 * scale  # float32: 6e-8 relative
+            assert _location_error(got, ref * 1e6) <= bound
         assert row["sweep_full_solves"] == 3 and row["sweep_error_estimate"] == 2e-4
         assert row["dofs"] == 1234 and row["edge_radius_mm"] == 5.5
     m = store.manifest
@@ -216,7 +229,7 @@ def _edit_row(path: Path, column: str, change) -> None:
     ("sweep_full_solves", lambda v: 0, "at least one solve"),
 ])
 def test_validate_checks_the_sweep_columns(tmp_path, column, change, words):
-    path = _dataset(tmp_path / "d")
+    path = _dataset(tmp_path / "d", compact=False)
     _edit_row(path, column, change)
     problems = validate_dataset(path)
     assert any(words in p for p in problems), problems
