@@ -153,6 +153,9 @@ def _groups(source: Store, rows_per_part: int) -> Iterator[tuple[dict[str, Any],
     solver: dict[str, Any] | None = None
     revisions: list[str] = []
     buffer: list[pa.Table] = []
+    # the newest source part's time, not the clock's: compacting the same parts again gives
+    # the same bytes, so a set re-compacted as it grows adds only its new parts to git
+    latest = ""
 
     def emit(everything: bool) -> Iterator[tuple[dict[str, Any], pa.Table]]:
         rows = pa.concat_tables(buffer) if buffer else None
@@ -162,7 +165,7 @@ def _groups(source: Store, rows_per_part: int) -> Iterator[tuple[dict[str, Any],
         start = 0
         while rows.num_rows - start >= (1 if everything else rows_per_part):
             yield ({"source": key[0], "solver": solver, "git_revisions": list(revisions),
-                    "written": utc_now()}, rows.slice(start, rows_per_part))
+                    **({"written": latest} if latest else {})}, rows.slice(start, rows_per_part))
             start += rows_per_part
         if start < rows.num_rows:
             buffer.append(rows.slice(start))
@@ -174,6 +177,9 @@ def _groups(source: Store, rows_per_part: int) -> Iterator[tuple[dict[str, Any],
         if this != key:
             yield from emit(everything=True)
             key, solver, revisions = this, own, []
+        written = meta.get("written")
+        if isinstance(written, str) and written > latest:
+            latest = written
         revision = (own or {}).get("git_revision")
         if revision and revision not in revisions:
             revisions.append(revision)

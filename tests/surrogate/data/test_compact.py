@@ -271,6 +271,17 @@ def test_compact_reencodes_every_row_and_keeps_the_provenance(tmp_path):
     assert validate_dataset(tmp_path / "new") == []
 
 
+def test_compacting_the_same_parts_again_gives_the_same_bytes(tmp_path):
+    """A set re-compacted as its source grows keeps its full parts byte for byte (git then
+    stores only the new ones): no clock in a part."""
+    src = _dataset(tmp_path / "old", n=7, compact=False)
+    compact_dataset(src, tmp_path / "a", rows_per_part=3)
+    compact_dataset(src, tmp_path / "b", rows_per_part=3)
+    a, b = _bytes(tmp_path / "a"), _bytes(tmp_path / "b")
+    parts = sorted(k for k in a if k.startswith("part-"))
+    assert len(parts) == 3 and all(a[k] == b[k] for k in parts)
+
+
 def test_compact_cli_refuses_an_existing_out_unless_overwrite(tmp_path, capsys):
     src = _dataset(tmp_path / "old", n=4, compact=False)
     out = _dataset(tmp_path / "out", n=2)
