@@ -50,6 +50,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from fieldspec import HapticromWarning
 from fieldspec.documents import read_json_file
 from surrogate.data.columns import (
     COMPLEX_FIELDS,
@@ -98,7 +99,7 @@ STATUSES = ("ok", "failed")
 _LATER_COLUMNS = frozenset(f.name for f in COMPLEX_FIELDS)
 
 
-class DatasetWarning(UserWarning):
+class DatasetWarning(HapticromWarning):
     """A dataset directory holds files that are not part of the dataset (ignored)."""
 
 
