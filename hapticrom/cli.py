@@ -132,7 +132,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     name = args.command
     _interruptible()
     try:
-        with quiet_libraries(not args.verbose):
+        with quiet_libraries(not getattr(args, "verbose", False)):
             return int(args.func(args) or EXIT_OK)
     except KeyboardInterrupt:
         print(f"hapticrom {name}: interrupted", file=sys.stderr)

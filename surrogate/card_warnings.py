@@ -70,17 +70,17 @@ def _coverage(card: Mapping[str, Any]) -> list[str]:
     else:
         cover = {k: m["coverage95"] for k, m in card["metrics"].items() if "coverage95" in m}
         n, where = int(card.get("training", {}).get("held_out", 0)), "held-out rows"
+    spread = 3 * math.sqrt(LEVEL * (1 - LEVEL) / max(n, 1))
+    said = []
     if n < MIN_HELD_OUT:
-        spread = 3 * math.sqrt(LEVEL * (1 - LEVEL) / max(n, 1))
-        return [f"only {n} {where}: its held-out errors and coverage are rough (a 95 % "
-                f"coverage measured on them is uncertain by +-{100 * spread:.0f} points); "
-                f"they cover {_list(cover)}"]
-    far = max(COVERAGE_SLACK, 3 * math.sqrt(LEVEL * (1 - LEVEL) / n))
+        said.append(f"only {n} {where}: its held-out errors and coverage are rough (a 95 % "
+                    f"coverage measured on them is uncertain by +-{100 * spread:.0f} points)")
+    far = max(COVERAGE_SLACK, spread)
     off = {k: v for k, v in cover.items() if abs(v - LEVEL) > far}
-    if not off:
-        return []
-    return [f"95 % intervals cover {_list(off)} of {n} {where}: far from 95 % (more than "
-            f"{100 * far:.0f} points off)"]
+    if off:
+        said.append(f"95 % intervals cover {_list(off)} of {n} {where}: far from 95 % (more "
+                    f"than {100 * far:.0f} points off)")
+    return said
 
 
 def _errors(metrics: Mapping[str, Any]) -> list[str]:

@@ -88,11 +88,14 @@ def test_a_calibrated_models_coverage_is_read_where_calibration_measured_it():
     assert "90 % (center_amplitude_um) of 410 rows kept apart by calibrate-intervals" in w
 
 
-def test_few_held_out_rows_are_called_rough_whatever_they_say():
-    [w] = card_warnings(card(training__held_out=13,
-                             metrics__center_amplitude_um__coverage95=0.31))
-    assert w.startswith("only 13 held-out rows: its held-out errors and coverage are rough")
-    assert "+-18 points" in w and "31 % (center_amplitude_um)" in w
+def test_few_held_out_rows_are_called_rough_and_far_coverage_still_far():
+    [rough, far] = card_warnings(card(training__held_out=13,
+                                      metrics__center_amplitude_um__coverage95=0.31))
+    assert rough == ("only 13 held-out rows: its held-out errors and coverage are rough (a 95 % "
+                     "coverage measured on them is uncertain by +-18 points)")
+    assert far == ("95 % intervals cover 31 % (center_amplitude_um) of 13 held-out rows: far "
+                   "from 95 % (more than 18 points off)")
+    assert card_warnings(card(training__held_out=13)) == [rough]
 
 
 def test_errors_far_from_the_targets():
