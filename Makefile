@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PIP := $(BIN)/pip install --quiet -c constraints.txt
 
-.PHONY: demo test test-slow lint bench bench-accuracy clean venv js
+.PHONY: demo test test-fast test-slow docs lint bench bench-accuracy clean venv js
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
@@ -46,13 +46,28 @@ demo: $(STAMP)
 	$(BIN)/hapticrom design examples/design-forearm.toml --out-dir out/design-forearm --overwrite \
 	  || [ $$? -eq 3 ]
 
+# The CI entry (.ci/run): lint, the import contracts, the fast tier on every core (pytest-xdist;
+# a test file's tests stay on one worker, so a module's fixtures are built once), then the site.
+TEST_WORKERS ?= auto
+
 test: $(STAMP) js
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
-	HAPTICROM_REQUIRE_JS=1 $(BIN)/python -m pytest -q
+	HAPTICROM_REQUIRE_JS=1 $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(MAKE) docs
 
+# The fast tier alone, without the JavaScript tools (their tests skip, saying what is missing).
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+
+# Long studies and end-to-end runs (tests marked slow): docs/development.md lists them.
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -m slow -n $(TEST_WORKERS) --dist loadfile
+
+# The documentation site into site/ (mkdocs.yml; a warning is an error); the Python examples of
+# README.md and docs/getting-started.md run while it builds (docs/hooks/site.py).
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
@@ -74,4 +89,4 @@ bench-accuracy: $(STAMP)
 	$(BIN)/hapticrom bench accuracy --out docs/accuracy-vs-time.md
 
 clean:
-	rm -rf $(VENV) out
+	rm -rf $(VENV) out site

@@ -12,7 +12,7 @@ Units live in the key names (``thickness_mm``, ``E_kPa``); this package converts
 It imports nothing of the project.
 """
 
-from fieldspec.errors import FieldError, WorkError
+from fieldspec.errors import FieldError, HapticromWarning, WorkError
 from fieldspec.spec import (
     REQUIRED,
     Context,
@@ -33,6 +33,7 @@ __all__ = [
     "REQUIRED",
     "Context",
     "FieldError",
+    "HapticromWarning",
     "Spec",
     "WorkError",
     "allowed_text",

@@ -1,6 +1,7 @@
 """The two error bases of the project: bad input (:class:`FieldError`) and work that failed
 on valid input (:class:`WorkError`). The command line maps them to its exit codes in one place
-(``hapticrom/cli.py``: 2 and 1)."""
+(``hapticrom/cli.py``: 2 and 1). And the base of the project's own warnings
+(:class:`HapticromWarning`), the only ones the command line shows without ``--verbose``."""
 
 from __future__ import annotations
 
@@ -24,3 +25,9 @@ class WorkError(RuntimeError):
     CLI: exit code 1, the message without a traceback). The one sibling of
     :class:`FieldError`; an unexpected error of any other type is a bug, and the CLI prints
     its traceback."""
+
+
+class HapticromWarning(UserWarning):
+    """A warning of the project itself (e.g. ``DatasetWarning``: stray files in a dataset).
+    The command line shows these always, and third-party warnings (deprecations of torch's
+    exporter, ...) only with ``--verbose``."""

@@ -18,26 +18,34 @@ applies the one exit-code policy of the project, the same for every command:
 
 Progress bars (transients, ``generate``, ``refine``, ``reproduce``) go to stderr with the rate
 and the ETA, only when stderr is a terminal; ``--quiet`` turns them off.
+
+Warnings: the project's own (:class:`fieldspec.HapticromWarning`) are always shown; those of
+the libraries it uses (torch's exporter notices and deprecations, ...) and their log messages
+below ERROR only with ``--verbose`` (accepted before or after any command name). What a result
+itself warns about (a model's coverage, a plan's criterion) is printed by its command.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import logging
 import os
 import signal
 import sys
 import threading
 import traceback
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Sequence
 from importlib.metadata import PackageNotFoundError, version
 
 from fem import SOLVER_VERSION  # cheap: fem loads its modules lazily
-from fieldspec import FieldError, WorkError
+from fieldspec import FieldError, HapticromWarning, WorkError
 from hapticrom.commands import COMMANDS
 
 __all__ = ["EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_OK", "build_parser", "main",
-           "version_text"]
+           "quiet_libraries", "version_text"]
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -67,7 +75,42 @@ def build_parser() -> argparse.ArgumentParser:
     for name in COMMANDS:
         module = importlib.import_module(f"hapticrom.commands.{name}")
         module.register(sub)
+    _add_verbose(parser, argparse.SUPPRESS)
+    parser.set_defaults(verbose=False)
     return parser
+
+
+def _add_verbose(parser: argparse.ArgumentParser, default: object) -> None:
+    """``--verbose`` on ``parser`` and every sub-command under it (``default`` SUPPRESS, so that
+    a sub-command's parser does not reset what was given before its name)."""
+    parser.add_argument("--verbose", action="store_true", default=default,
+                        help="also show the warnings and log notices of the libraries used "
+                        "(torch, scikit-learn, ...); the project's own are always shown")
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in set(action.choices.values()):
+                _add_verbose(child, argparse.SUPPRESS)
+
+
+@contextlib.contextmanager
+def quiet_libraries(quiet: bool = True) -> Iterator[None]:
+    """While it lasts, keep the libraries' warnings and log messages below ERROR off the
+    terminal (``quiet``); the project's own warnings (:class:`fieldspec.HapticromWarning`) stay
+    on. The project logs nothing itself (it prints), so the logging switch only touches
+    libraries; it is global because torch re-initialises its loggers' levels whenever it is
+    imported. Both are restored on exit (``main`` may run in a caller's process)."""
+    if not quiet:
+        yield
+        return
+    before = logging.root.manager.disable
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        warnings.simplefilter("default", HapticromWarning)
+        logging.disable(logging.WARNING)
+        try:
+            yield
+        finally:
+            logging.disable(before)
 
 
 def _interruptible() -> None:
@@ -89,7 +132,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     name = args.command
     _interruptible()
     try:
-        return int(args.func(args) or EXIT_OK)
+        with quiet_libraries(not getattr(args, "verbose", False)):
+            return int(args.func(args) or EXIT_OK)
     except KeyboardInterrupt:
         print(f"hapticrom {name}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import date
 from pathlib import Path
@@ -199,6 +200,13 @@ class ExposureMeter:
     """Per-site accumulated sum of a_hw^2 T [m^2/s^3] for one day; optionally kept in a file
     (``state_path``) so that separate sessions of the same day add up.
 
+    The day is the local calendar day (the host's time zone, ``TZ``) given by the clock
+    ``today`` (:meth:`datetime.date.today` unless a caller injects another) when a dose is
+    added: a play that crosses a local midnight puts what it plays before midnight on the old
+    day and the rest on the new one, split within :data:`ACCRUE_S` (docs/safety.md). A
+    daylight-saving change moves no dose: the date of the wall clock decides, whatever the
+    offset.
+
     The file is append-only JSON lines, written through: every exposure added is one line
     ``{"date": "YYYY-MM-DD", "dose": [per site]}`` (an increment), flushed and fsync'd before
     the call returns, so a host killed with ``kill -9`` loses at most the exposure since the
@@ -210,16 +218,29 @@ class ExposureMeter:
     n_sites: int
     limit: float = EXPOSURE_ACTION_VALUE
     state_path: Path | None = None
-    dose: NDArray = field(init=False)
+    today: Callable[[], date] = field(default=date.today, repr=False, compare=False)
+    _by_day: dict[date, NDArray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        self.dose = np.zeros(self.n_sites)
-        if self.state_path is not None and Path(self.state_path).exists():
-            self.dose = self._read(Path(self.state_path))
+        self._by_day = {}
+        self._dose_of(self.today())  # a malformed file is refused now, not at the first dose
 
-    def _read(self, path: Path) -> NDArray:
+    @property
+    def dose(self) -> NDArray:
+        """Today's dose per site so far [m^2/s^3] (today: the clock ``today``)."""
+        return self._dose_of(self.today())
+
+    def _dose_of(self, day: date) -> NDArray:
+        """The dose of ``day``: what this meter added, or the file's lines of that day."""
+        if day not in self._by_day:
+            path = None if self.state_path is None else Path(self.state_path)
+            self._by_day[day] = (self._read(path, day) if path is not None and path.exists()
+                                 else np.zeros(self.n_sites))
+        return self._by_day[day]
+
+    def _read(self, path: Path, day: date) -> NDArray:
         total = np.zeros(self.n_sites)
-        today = date.today().isoformat()
+        today = day.isoformat()
         lines = path.read_text(encoding="utf-8").split("\n")
         for i, line in enumerate(lines, 1):
             if not line.strip():
@@ -288,9 +309,10 @@ class ExposureMeter:
             self._add(self.increment(amp, schedule.frequency_hz, overlap_s * 1e-3))
 
     def _add(self, inc: NDArray) -> None:
-        self.dose = self.dose + inc
+        day = self.today()  # one reading: the line and the sum agree on the day
+        self._by_day[day] = self._dose_of(day) + inc
         if self.state_path is not None:
-            line = json.dumps({"date": date.today().isoformat(),
+            line = json.dumps({"date": day.isoformat(),
                                "dose": [float(f"{v:.9g}") for v in inc]})
             fd = os.open(self.state_path, os.O_RDWR | os.O_APPEND | os.O_CREAT, 0o644)
             try:

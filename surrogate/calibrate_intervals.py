@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate.card_warnings import card_warnings
 from surrogate.intervals import calibrate, coverage, residuals
 from surrogate.registry import manifest_sha256
 from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
@@ -73,7 +74,8 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
                                  "after": coverage(r_check, entry["log_std_scale"], extra)}
     entry["command"] = "hapticrom models calibrate-intervals"
     if write:
-        _write_card(root, {**card, CALIBRATION_KEY: entry})
+        new = {**card, CALIBRATION_KEY: entry}
+        _write_card(root, {**new, "warnings": card_warnings(new)})
     return entry
 
 

@@ -46,11 +46,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LEVEL", "Z95", "calibrate", "conformal_quantile", "coverage", "groups",
-           "normalised_residual", "residuals"]
+__all__ = ["AUTO_CALIBRATION_FRACTION", "AUTO_CALIBRATION_ROWS", "LEVEL", "Z95", "calibrate",
+           "conformal_quantile", "coverage", "groups", "normalised_residual", "residuals"]
 
 LEVEL = 0.95
 Z95 = 1.959964
+#: Interval calibration by default (``hapticrom train``): this share of the training rows, when
+#: it is at least AUTO_CALIBRATION_ROWS rows (a 95 % quantile of fewer is too noisy to ship by
+#: default; surrogate.card_warnings says so on a model trained on fewer)
+AUTO_CALIBRATION_FRACTION = 0.1
+AUTO_CALIBRATION_ROWS = 100
 
 
 def groups(k: int, extra: Sequence[str] = ()) -> dict[str, list[int]]:

@@ -21,6 +21,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from surrogate.card_warnings import card_warnings
 from surrogate.runtime import load_model
 from surrogate.runtime.card import (
     CARD_NAME,
@@ -113,6 +114,7 @@ def write_model(out: str | Path, card: Mapping[str, Any], files: Mapping[str, by
         full = {"format": FORMAT, "card_version": CARD_VERSION, "name": out.name,
                 **card, "created": utc_now(),
                 "files": {name: sha256_file(tmp / name) for name in sorted(files)}}
+        full["warnings"] = card_warnings(full)
         (tmp / CARD_NAME).write_text(json.dumps(seal_card(full), indent=1) + "\n")
         for f in tmp.iterdir():
             with open(f, "rb") as fh:
@@ -154,7 +156,8 @@ def show_model(path: str | Path) -> dict[str, Any]:
 
 def list_models(root: str | Path = "models") -> list[dict[str, Any]]:
     """One summary per model directory under ``root``: name, kind, created, status ("ok" or
-    "refused: " and why) and the headline held-out metrics. Every directory holding a
+    "refused: " and why), the headline held-out metrics and the card's warnings
+    (:func:`surrogate.card_warnings.card_warnings`). Every directory holding a
     ``card.json`` is verified as a whole (:func:`surrogate.runtime.card.verify_model_dir`);
     one bad model never stops the listing."""
     root = Path(root)
@@ -171,7 +174,7 @@ def list_models(root: str | Path = "models") -> list[dict[str, Any]]:
             rows.append({"name": d.name, "status": f"refused: {err}"})
             continue
         rows.append({"name": d.name, "kind": card.get("kind"), "created": card.get("created"),
-                     "status": "ok", "headline": headline})
+                     "status": "ok", "headline": headline, "warnings": card_warnings(card)})
     return rows
 
 

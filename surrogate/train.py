@@ -29,7 +29,14 @@ from fieldspec import FieldError
 from surrogate.data.columns import PROFILE_OUTPUTS
 from surrogate.data.store import Store, profile_matrix
 from surrogate.features import codes_from_frame, edge_radii_mm, input_specs, merge_specs
-from surrogate.intervals import Z95, calibrate, normalised_residual, residuals
+from surrogate.intervals import (
+    AUTO_CALIBRATION_FRACTION,
+    AUTO_CALIBRATION_ROWS,
+    Z95,
+    calibrate,
+    normalised_residual,
+    residuals,
+)
 from surrogate.kind import SurrogateKind, estimator_params
 from surrogate.pod import ProfileTargets, output_columns
 from surrogate.registry import (
@@ -44,10 +51,6 @@ from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
 __all__ = ["TrainingData", "card_head", "check_outputs", "edge_radius_rule", "evaluate",
            "load_datasets", "train"]
 
-#: Interval calibration by default: this share of the training rows, when it is at least
-#: AUTO_CALIBRATION_ROWS rows (a 95 % quantile of fewer is too noisy to ship by default)
-AUTO_CALIBRATION_FRACTION = 0.1
-AUTO_CALIBRATION_ROWS = 100
 PREDICTS = ("Harmonic steady-state vibration amplitude of a haptic unit on the skin surface: "
             "at the center, at the unit's edge, their ratio, and the amplitude-distance "
             "profile outside the edge")

@@ -24,6 +24,8 @@ def _list(args: argparse.Namespace) -> int:
         status = f"ok  {r['headline']}" if r["status"] == "ok" else r["status"]
         print(f"{r['name']:24s} {r.get('kind') or '-':4s} {r.get('created') or '-':26s} "
               f"{status}")
+        for w in r.get("warnings", []):
+            print(f"  warning: {w}")
     return 0 if all(r["status"] == "ok" for r in rows) else 2  # a broken model: bad input
 
 

@@ -37,6 +37,7 @@ def _run(args: argparse.Namespace) -> int:
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds
+    from surrogate.card_warnings import card_warnings
     from surrogate.sweep.targets import check_not_mixed
     from surrogate.sweep.train import train_sweep
     from surrogate.train import train
@@ -53,6 +54,8 @@ def _run(args: argparse.Namespace) -> int:
     for line in kind.report(card):
         print(line)
     print(f"wrote {args.out}")
+    for w in card_warnings(card):  # as the card says (written when it was sealed)
+        print(f"warning: {w}")
     return 0
 
 

@@ -57,6 +57,7 @@ from typing import Any
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from fieldspec import HapticromWarning
 from fieldspec.documents import read_json_file
 from surrogate.data.codec import CodecError, SweepCodec, worst_errors
 from surrogate.data.columns import (
@@ -107,7 +108,7 @@ STATUSES = ("ok", "failed")
 _LATER_COLUMNS = frozenset(f.name for f in COMPLEX_FIELDS)
 
 
-class DatasetWarning(UserWarning):
+class DatasetWarning(HapticromWarning):
     """A dataset directory holds files that are not part of the dataset (ignored)."""
 
 

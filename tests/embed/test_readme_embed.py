@@ -1,22 +1,30 @@
-"""The README's "Embed the predictor" Python lines run as printed and give the answer
-docs/embedding.md quotes for its worked example."""
+"""The predictor's Python lines as printed run and give the answer docs/embedding.md quotes
+for its worked example: the README's "Predict" example and the "Embed the predictor" section
+of docs/surrogates.md (where the README's section of that name moved)."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 
+import pytest
 from embed_cases import REPO
 
 
-def test_readme_python_lines_run():
-    text = (REPO / "README.md").read_text()
-    section = text.split("## Embed the predictor", 1)[1].split("\n## ", 1)[0]
-    code = section.split("```python\n", 1)[1].split("```", 1)[0]
+def _block(path: str, marker: str) -> str:
+    """The first ```python block after ``marker`` in ``path``."""
+    text = (REPO / path).read_text().split(marker, 1)[1]
+    return text.split("```python\n", 1)[1].split("```", 1)[0]
+
+
+@pytest.mark.parametrize("path, marker", [("README.md", "**Predict**"),
+                                          ("docs/surrogates.md", "## Embed the predictor")])
+def test_readme_python_lines_run(path, marker):
+    code = _block(path, marker)
     assert len([line for line in code.splitlines() if line.strip()]) <= 10
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code, "README.md", "exec"), {})
+        exec(compile(code, path, "exec"), {})
     first = out.getvalue().splitlines()[0]
     assert first.startswith("[13.969") and "[4.55]" in first  # docs/embedding.md, section 6
     assert "13.969" in (REPO / "docs/embedding.md").read_text()

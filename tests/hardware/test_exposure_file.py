@@ -1,6 +1,8 @@
 """Issue 27 item 4: the daily exposure survives a crash. The dose is appended to the exposure
 file as it accrues (fsync'd lines), so a host killed with kill -9 loses at most the last
-second; a malformed exposure file is refused naming the file, the line and the key (exit 2)."""
+second; a malformed exposure file is refused naming the file, the line and the key (exit 2).
+The meters here read a fixed clock (``today=``): what day a dose lands on is
+test_exposure_days.py's subject."""
 
 from __future__ import annotations
 
@@ -22,7 +24,13 @@ from hardware import ExposureMeter, SafetyError, build_schedule, load_pattern, p
 from hardware.emulator import PtyEmulator
 
 ROOT = Path(__file__).resolve().parents[2]
-TODAY = date.today().isoformat()
+DAY = date(2026, 3, 14)  # the meters' clock: no test here reads the wall clock's date
+TODAY = DAY.isoformat()
+
+
+def on_day(n_sites: int, state: Path | None) -> ExposureMeter:
+    """A meter of ``state`` whose clock says DAY."""
+    return ExposureMeter(n_sites, state_path=state, today=lambda: DAY)
 
 
 def files(tmp_path: Path, n_steps: int) -> tuple[Path, Path]:
@@ -36,28 +44,28 @@ def files(tmp_path: Path, n_steps: int) -> tuple[Path, Path]:
 
 def test_the_file_is_append_only_lines_that_add_up(tmp_path):
     state = tmp_path / "exposure.jsonl"
-    one = ExposureMeter(2, state_path=state)
+    one = on_day(2, state)
     one.record(np.array([[1e-6, 0.0]]), 125.0, [60.0])
     one.record(np.array([[1e-6, 2e-6]]), 125.0, [60.0])
     lines = [json.loads(x) for x in state.read_text().splitlines()]
     assert len(lines) == 2 and all(x["date"] == TODAY for x in lines)
-    assert ExposureMeter(2, state_path=state).dose == pytest.approx(one.dose, rel=1e-8)
+    assert on_day(2, state).dose == pytest.approx(one.dose, rel=1e-8)
     # a line torn by a crash while it was written is skipped, and the next one starts afresh
     with state.open("a") as f:
         f.write('{"date": "' + TODAY + '", "dose": [1.0')
-    assert ExposureMeter(2, state_path=state).dose == pytest.approx(one.dose, rel=1e-8)
-    two = ExposureMeter(2, state_path=state)
+    assert on_day(2, state).dose == pytest.approx(one.dose, rel=1e-8)
+    two = on_day(2, state)
     two.record(np.array([[1e-6, 0.0]]), 125.0, [60.0])
-    assert ExposureMeter(2, state_path=state).dose == pytest.approx(two.dose, rel=1e-8)
+    assert on_day(2, state).dose == pytest.approx(two.dose, rel=1e-8)
     # yesterday's lines and another array's do not count today
     with state.open("a") as f:
         f.write(json.dumps({"date": "2000-01-01", "dose": [9.0, 9.0]}) + "\n")
         f.write(json.dumps({"date": TODAY, "dose": [9.0, 9.0, 9.0]}) + "\n")
-    assert ExposureMeter(2, state_path=state).dose == pytest.approx(two.dose, rel=1e-8)
+    assert on_day(2, state).dose == pytest.approx(two.dose, rel=1e-8)
     # the earlier layout (one object with the day's total) is one such line
     old = tmp_path / "old.json"
     old.write_text(json.dumps({"date": TODAY, "dose": [0.5, 0.25]}))
-    assert ExposureMeter(2, state_path=old).dose.tolist() == [0.5, 0.25]
+    assert on_day(2, old).dose.tolist() == [0.5, 0.25]
 
 
 @pytest.mark.parametrize("text, words", [
@@ -71,7 +79,7 @@ def test_a_malformed_exposure_file_is_refused_naming_it(tmp_path, capsys, text, 
     state = tmp_path / "exposure.jsonl"
     state.write_text(text)
     with pytest.raises(SafetyError) as err:
-        ExposureMeter(3, state_path=state)
+        on_day(3, state)
     assert err.value.field == "exposure-file" and words in str(err.value)
     plan, pattern = files(tmp_path, 1)
     rc = main(["play", str(plan), str(pattern), "--device", "serial:/dev/null-none",
@@ -98,10 +106,13 @@ def test_kill_9_while_playing_loses_at_most_the_last_second(tmp_path):
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=30)
     assert t_start is not None and proc.returncode == -signal.SIGKILL
-    recorded = ExposureMeter(3, state_path=state).dose
+    # every line the killed process wrote, whatever day its clock said (the run may cross a
+    # midnight): what survives the crash is the subject here
+    recorded = np.sum([json.loads(x)["dose"] for x in state.read_text().splitlines()
+                       if x.endswith("}")], axis=0)
     sched = build_schedule(load_pattern(pattern), plan_from_dict(json.loads(plan.read_text())))
     played_ms = (t_kill - t_start) * 1e3
-    at_least, at_most = ExposureMeter(3), ExposureMeter(3)
+    at_least, at_most = on_day(3, None), on_day(3, None)
     at_least.accrue(sched, 0.0, played_ms - 1000.0)  # everything but the last second
     at_most.accrue(sched, 0.0, played_ms + 50.0)
     assert played_ms < sched.total_ms - 1000  # killed well before the end

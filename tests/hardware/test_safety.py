@@ -48,7 +48,7 @@ def test_acceleration_and_a8_by_hand():
 
 
 def test_exposure_meter_by_hand_and_the_action_value(tmp_path):
-    m = ExposureMeter(2)
+    m = ExposureMeter(2, today=lambda: date(2026, 3, 14))
     # site 0: 10 um at 125 Hz for 1 h; site 1 still
     a_hw = (2 * math.pi * 125) ** 2 * 1e-5 / math.sqrt(2) * float(wh_weight(125.0))
     after = m.check(np.array([[10e-6, 0.0]]), 125.0, [3600.0])
@@ -63,13 +63,13 @@ def test_exposure_meter_by_hand_and_the_action_value(tmp_path):
         m.check(np.array([[u, 0.0]]), 125.0, [2.1 * 3600])
     # the day's dose is kept across sessions in the state file
     state = tmp_path / "exposure.json"
-    first = ExposureMeter(2, state_path=state)
+    first = ExposureMeter(2, state_path=state, today=lambda: date(2026, 3, 14))
     first.record(np.array([[u, 0.0]]), 125.0, [1.0 * 3600])
-    second = ExposureMeter(2, state_path=state)
+    second = ExposureMeter(2, state_path=state, today=lambda: date(2026, 3, 14))
     assert second.a8()[0] == pytest.approx(5.0 * math.sqrt(1 / 8))
     with pytest.raises(SafetyError, match=r"A\(8\) = 2\.56"):
         second.check(np.array([[u, 0.0]]), 125.0, [1.1 * 3600])
-    assert date.today().isoformat() in state.read_text()
+    assert '"date": "2026-03-14"' in state.read_text()
 
 
 def test_schedule_on_time_merges_touching_segments():

@@ -1,7 +1,11 @@
 """`hapticrom bench accuracy` (studies.accuracy): the quick run writes a complete report and
 plot whose numbers are finite and consistent (finer mesh -> smaller error, ONNX = in-memory
 model, the default mesh equals the level-1 quadratic ladder row), bad arguments exit 2 without
-writing, and the metric and curve helpers are exact on analytic inputs."""
+writing, and the metric and curve helpers are exact on analytic inputs.
+
+The tests on the quick run's result are the study itself, run CI-sized (43 s on a quiet
+2-core machine, the slowest of the fast tier): they are in the slow tier (``make test-slow``);
+the helpers, the designs and the argument checks stay in the fast tier."""
 
 import math
 import re
@@ -67,6 +71,7 @@ def test_designs_are_held_out_distinct_and_deterministic():
         pick_designs(sd, 0)
 
 
+@pytest.mark.slow
 def test_quick_study_numbers_are_finite_and_consistent(result):
     fe = {(r["order"], r["level"]): r for r in result["fe"]}
     for r in result["fe"]:
@@ -95,6 +100,7 @@ def test_quick_study_numbers_are_finite_and_consistent(result):
     assert sum(eff["no encapsulation"][k] for k in ("applies", "not_present", "refused")) == 3
 
 
+@pytest.mark.slow
 def test_report_structure(result):
     text = render(result, "x.png", "hapticrom bench accuracy --quick")
     positions = [text.index(s) for s in SECTIONS]
@@ -105,6 +111,7 @@ def test_report_structure(result):
     assert len(table) == 4
 
 
+@pytest.mark.slow
 def test_cli_writes_report_and_plot(tmp_path, result, monkeypatch):
     import studies.accuracy as acc
 
