@@ -6,7 +6,7 @@ parity tolerance live in its own module (``surrogate/gp.py``, ``nn.py``, ``mlp.p
 ``lgbm.py``). Adding a kind is one new module defining ``KIND`` plus its line in
 :data:`KINDS` (docs/architecture.md).
 
-Importing this module loads scikit-learn, torch and pysindy (about 5 s): the CLI imports it
+Importing this module loads scikit-learn and torch (about 5 s): the CLI imports it
 only when a command needs a kind, never to build its parser.
 """
 

@@ -21,7 +21,9 @@ features (one map per attachment by default, ``group_by_attachment``):
    (scipy) on the envelope error relative to each run's FE peak.
 
 The choice of correction (one rotating-frame mode vs a plain first-order lag of the steady
-response) was made by measurement: see docs/transient-model.md.
+response) was made by measurement, and so was the fit itself: SINDy with control (pysindy)
+identifying what this model lacks lost to it on the held-out runs
+(``bench/bench_envelope_sindy.py``); see docs/transient-model.md.
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ def _options(text: str | None) -> dict:
 
 
 def _run(args: argparse.Namespace) -> int:
-    # Lazy: the registry loads scikit-learn, torch and pysindy (about 5 s measured with
+    # Lazy: the registry loads scikit-learn and torch (about 5 s measured with
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds
