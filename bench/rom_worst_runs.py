@@ -15,7 +15,7 @@ its schedule):
   the split of the error into the harmonic NN's own (``model_vs_hyst``: the model's level
   against a hysteretic harmonic solve on the transient's mesh), the damping model
   (``own_vs_hyst``: the band model's steady state against the hysteretic one) and the FE
-  window's unsteadiness (``tone_vs_own``);
+  window's unsteadiness (the window's level against the band model's steady state, ``own``);
 - rise: ``fragile`` when an envelope crosses 90 % of its final level and falls back below it
   before switch-off (the 10-90 % rise then jumps between a resonance or an overshoot and the
   end of the approach), the FE's and the model's largest level before switch-off over the
@@ -144,16 +144,18 @@ def _steady_cause(info: dict[str, Any], p: str, levels: dict[str, Any] | None) -
              "FE settled" if row.get(f"{p}_settled") else "FE not settled"]
     if levels is not None:
         j = 0 if p == "center" else 1
-        parts.append("NN vs hyst. FE {:+.0f} %, band vs hyst. {:+.0f} %, window vs FE steady "
-                     "{:+.0f} %".format(*(100 * levels[k][j] for k in
-                                          ("model_vs_hyst", "own_vs_hyst", "tone_vs_own"))))
+        window = levels["fe_um"][j] / levels["levels_um"]["own"][j] - 1.0
+        parts.append(f"NN vs hyst. FE {100 * levels['model_vs_hyst'][j]:+.0f} %, band vs "
+                     f"hyst. {100 * levels['own_vs_hyst'][j]:+.0f} %, FE window vs its steady "
+                     f"state {100 * window:+.0f} %")
     return ", ".join(parts)
 
 
 def _rise_cause(info: dict[str, Any], p: str) -> str:
     q, row = info[p], info["row"]
     fragile = [w for w, k in (("FE", "fragile_fe"), ("model", "fragile_model")) if q[k]]
-    parts = [f"fragile ({' and '.join(fragile)} fall back below 90 %)" if fragile
+    verb = "falls" if len(fragile) == 1 else "fall"
+    parts = [f"fragile ({' and '.join(fragile)} {verb} back below 90 %)" if fragile
              else "crossing final"]
     parts.append(f"peak/level FE {q['peak_fe']:.2f}, model {q['peak_model']:.2f}")
     parts.append(f"model quasi-static {q['quasi_static_rise_ms']:.1f} ms vs its real "
@@ -196,7 +198,8 @@ def table(described: dict[int, dict[str, Any]], metric: str, n: int = 10,
             cause = (_rise_cause if metric == "rise" else _decay_cause)(info, p)
         cells = " \\| ".join("-" if not math.isfinite(e) else f"{scale * e:.1f}"
                              for e in errs.values())
-        lines.append(f"| {idx} | {info['attachment']}, {info['n_rings']} rings | "
+        lines.append(f"| {idx} | {info['attachment']}, {info['n_rings']} ring"
+                     f"{'' if info['n_rings'] == 1 else 's'} | "
                      f"{info['f_off_hz']:.0f} Hz | {'yes' if info['kick'] else 'no'} | {cells} | "
                      f"{p}: sigma {info[p]['sigma_1_s']:.0f} 1/s, f_n "
                      f"{info[p]['fn_hz']:.0f} Hz | {cause} |")
