@@ -24,7 +24,7 @@ __all__ = ["KINDS", "STEADY_KINDS", "get"]
 
 #: Options of the envelope model's identification (``--options`` of ``--kind rom``).
 _ROM_OPTIONS = ("harmonic", "max_nfev", "equivalent_loss",
-                "group_by_attachment", "learn_gain", "modes")
+                "group_by_attachment", "learn_gain", "modes", "quasi_static_share")
 
 
 def _train_rom(paths: Sequence[str | Path], out: str | Path, *, seed: int, overwrite: bool,

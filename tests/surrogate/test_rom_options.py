@@ -158,6 +158,33 @@ def test_two_modes_are_identified_back(model):
         assert report[point]["refined_rms"] < 1e-3
 
 
+def test_a_quasi_static_share_and_one_mode_are_identified_back(model):
+    """Runs made by a quasi-static share w of the steady response (mode 1 held at QS_SIGMA)
+    beside one mode: the fit holds mode 1 and recovers the mode and the share."""
+    from surrogate import rom
+
+    truth = [math.log(rom.QS_SIGMA), rom.QS_FN, 0.0, 0.0, math.log(40.0), 45.0, 0.3]
+    runs, amps = _synthetic_runs(model, [truth])
+    weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, model.grid_hz,
+                                      learn_gain=False, modes=2, share=True)
+    for point in ("center", "edge"):
+        w = weights[point][:, 0]
+        assert w[:4] == pytest.approx([math.log(rom.QS_SIGMA), rom.QS_FN, 0.0, 0.0])  # held
+        assert math.exp(w[4]) == pytest.approx(40.0, rel=0.02)
+        assert w[5] == pytest.approx(45.0, abs=0.5)
+        assert w[6] == pytest.approx(0.3, abs=0.01)
+        assert report[point]["refined_rms"] < 1e-3
+
+
+def test_the_quasi_static_share_option_is_checked(tmp_path):
+    from surrogate import rom
+
+    for bad in ({"quasi_static_share": 1}, {"quasi_static_share": True, "modes": 2}):
+        with pytest.raises(ValueError, match="quasi_static_share"):
+            rom.train(["unused"], tmp_path / "out", **bad)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("share", [0.7, 1.6, -0.5])
 def test_two_modes_settle_on_the_steady_response_exactly(share):
     """c_1 = w, c_2 = 1 - w: at constant speed z_1 + z_2 = A, whatever the (real) share."""
