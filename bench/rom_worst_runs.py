@@ -9,7 +9,9 @@ measured on the run itself (the FE envelope demodulated as in training, the mode
 its schedule):
 
 - every metric: attachment and rings, the speed at switch-off (Hz), whether the first burst
-  starts with an overdrive kick, and the model's mode at the worse point (sigma 1/s, f_n Hz);
+  starts with an overdrive kick, and the model's mode at the worse point (sigma 1/s, f_n Hz;
+  with two modes the second, and w, the first's share: with ``quasi_static_share`` the share
+  of the steady response passed through at once);
 - steady: whether the FE envelope had settled (the card's test), the model high or low, and,
   with ``--steady-levels`` (the ``--json`` of ``bench/rom_steady_levels.py`` on these runs),
   the split of the error into the harmonic NN's own (``model_vs_hyst``: the model's level
@@ -125,8 +127,11 @@ def describe(model_path: str | Path, data: str | Path) -> dict[int, dict[str, An
             fe, mo = run.env[j], sim[f"{p}_envelope_um"]
             lf, lm = float(fe[drive].mean()), float(mo[drive].mean())
             up = run.t < on
+            par = params[p]
+            slow = "2" if model.modes == 2 else ""  # the dynamic mode beside a share
             info[p] = {
-                "sigma_1_s": params[p]["sigma_1_s"], "fn_hz": params[p]["fn_hz"],
+                "sigma_1_s": par[f"sigma{slow}_1_s"], "fn_hz": par[f"fn{slow}_hz"],
+                "share": par.get("weight"),
                 "fragile_fe": _falls_back(run.t, fe, on, lf),
                 "fragile_model": _falls_back(run.t, mo, on, lm),
                 "peak_fe": float(fe[up].max() / lf), "peak_model": float(mo[up].max() / lm),
@@ -174,6 +179,12 @@ def _decay_cause(info: dict[str, Any], p: str) -> str:
     return ", ".join(parts)
 
 
+def _share(q: dict[str, Any]) -> str:
+    """Mode 1's share w of the force, for a model with two modes (with
+    ``quasi_static_share``: the share passed through at once)."""
+    return "" if q["share"] is None else f", w {q['share']:.2f}"
+
+
 def table(described: dict[int, dict[str, Any]], metric: str, n: int = 10,
           levels: dict[int, dict[str, Any]] | None = None) -> list[str]:
     """Markdown rows of the ``n`` worst runs of ``metric``: ranked by the larger of the centre
@@ -202,7 +213,7 @@ def table(described: dict[int, dict[str, Any]], metric: str, n: int = 10,
                      f"{'' if info['n_rings'] == 1 else 's'} | "
                      f"{info['f_off_hz']:.0f} Hz | {'yes' if info['kick'] else 'no'} | {cells} | "
                      f"{p}: sigma {info[p]['sigma_1_s']:.0f} 1/s, f_n "
-                     f"{info[p]['fn_hz']:.0f} Hz | {cause} |")
+                     f"{info[p]['fn_hz']:.0f} Hz{_share(info[p])} | {cause} |")
     return lines
 
 

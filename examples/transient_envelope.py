@@ -7,8 +7,9 @@ rings, the third row of examples/designs.csv) driven three ways: plain 3.3 V on/
 4.5 V overdrive kick; the kick plus 8 ms of reverse voltage to brake. Prints the center
 envelope and the motor speed every 10 ms, from the run-time envelope model (numpy and
 onnxruntime: the motor law's speed, the harmonic NN shipped inside the model for the steady
-response at that speed, and one damped mode per point whose coefficients, plain JSON, are
-fitted to FE transients by least squares in ``surrogate/rom.py``; docs/transient-model.md).
+response at that speed, and per point one damped mode beside a share of that response passed
+through at once, whose coefficients, plain JSON, are fitted to FE transients by least squares
+in ``surrogate/rom.py``; docs/transient-model.md).
 The envelope is not monotonic in the speed: as the motor sweeps up (and down again) its
 frequency passes the unit's resonances on the tissue, which the FE runs show too.
 """

@@ -20,10 +20,13 @@ features (one map per attachment by default, ``group_by_attachment``):
 3. The weights are refined jointly over all training runs by nonlinear least squares
    (scipy) on the envelope error relative to each run's FE peak.
 
-The choice of correction (one rotating-frame mode vs a plain first-order lag of the steady
-response) was made by measurement, and so was the fit itself: SINDy with control (pysindy)
-identifying what this model lacks lost to it on the held-out runs
-(``bench/bench_envelope_sindy.py``); see docs/transient-model.md.
+With ``quasi_static_share`` (the shipped ``models/rom-default``) a share w of the steady
+response passes through at once beside the mode (per run refined after the one-mode fit, then
+mapped and refined jointly like the mode). The choice of correction (one rotating-frame mode vs
+a plain first-order lag of the steady response, the share) was made by measurement, and so
+was the fit itself: SINDy with control (pysindy) identifying what the one-mode model lacks
+lost to it on the held-out runs (``bench/bench_envelope_sindy.py``); see
+docs/transient-model.md.
 """
 
 from __future__ import annotations

@@ -29,7 +29,9 @@ learns only a small dynamic remainder (coefficients from ``surrogate.rom``):
    with omega and A held at their step averages. Optionally (``coefficients.modes`` = 2) two
    modes per point, z = z_1 + z_2, mode 1 forced with a share w of the force and mode 2 with
    1 - w, so the steady state is still A (:mod:`surrogate.runtime.rom_modes`); the continuation
-   below the band goes through mode 1.
+   below the band goes through mode 1. ``models/rom-default`` is such a model fitted with
+   ``quasi_static_share`` (recorded in its coefficients): mode 1 held at sigma = 5,000 1/s
+   passes its share w of A through at once and mode 2 carries the lag and the ring-down.
 
 The mode (log sigma, f_n), log g and s (two modes: also log sigma_2, f_2, w) are affine in
 the harmonic model's encoded design features (its own encoding, frequency column left out; with
