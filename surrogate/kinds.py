@@ -46,7 +46,7 @@ def _rom_report(card: Mapping[str, Any]) -> list[str]:
 #: The transient envelope model: identified from transient runs by its own pipeline
 #: (:mod:`surrogate.rom`), written as coefficients (not an ONNX graph).
 ROM = SurrogateKind(name="rom", summary="transient envelope model (grey box: motor law x "
-                    "harmonic NN x one damped mode, fitted by least squares)",
+                    "harmonic NN x damped modes, fitted by least squares)",
                     trainer=_train_rom, report=_rom_report)
 
 #: Every kind, by name, in the order ``--help`` lists them.
