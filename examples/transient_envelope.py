@@ -2,12 +2,16 @@
 
     .venv/bin/python examples/transient_envelope.py [--model models/rom-default]
 
-A 60 ms haptic pulse of the optimised unit (reverse motor on pogo pins) driven three ways:
-plain 3.3 V on/off; a 10 ms 4.5 V overdrive kick; the kick plus 8 ms of reverse voltage to
-brake. Prints the center envelope and the motor speed every 10 ms, from the run-time ROM
-(numpy only; the coefficients are plain JSON, identified with pysindy from FE transients).
+A 60 ms haptic pulse of the optimised unit (reverse motor on pogo pins in three silicone
+rings, the third row of examples/designs.csv) driven three ways: plain 3.3 V on/off; a 10 ms
+4.5 V overdrive kick; the kick plus 8 ms of reverse voltage to brake. Prints the center
+envelope and the motor speed every 10 ms, from the run-time envelope model (numpy and
+onnxruntime: the motor law's speed, the harmonic NN shipped inside the model for the steady
+response at that speed, and per point one damped mode beside a share of that response passed
+through at once, whose coefficients, plain JSON, are fitted to FE transients by least squares
+in ``surrogate/rom.py``; docs/transient-model.md).
 The envelope is not monotonic in the speed: as the motor sweeps up (and down again) its
-frequency passes the tissue's guided-wave resonances, which the FE runs show too.
+frequency passes the unit's resonances on the tissue, which the FE runs show too.
 """
 
 from __future__ import annotations
@@ -20,8 +24,11 @@ import numpy as np
 from surrogate.runtime.rom import load_envelope_model
 
 ROOT = Path(__file__).resolve().parents[1]
-DESIGN = {"skin_E_kPa": 49.0, "fat_thickness_mm": 14.0, "orientation": "reverse",
-          "attachment": "pogo", "tau_spinup_ms": 20.0, "tau_spindown_ms": 35.0}
+DESIGN = {"orientation": "reverse", "attachment": "pogo", "n_rings": 3, "ring_1_E_kPa": 95.0,
+          "ring_2_E_kPa": 260.0, "ring_3_E_kPa": 1016.0, "ring_density_kg_m3": 1060.0,
+          "ring_nu": 0.49, "ring_loss_factor": 0.1, "skin_E_kPa": 49.0,
+          "fat_thickness_mm": 14.0, "tissue_loss_factor": 0.3, "tau_spinup_ms": 20.0,
+          "tau_spindown_ms": 35.0}
 #: (start ms, volts) steps of each schedule; the pulse is on for 60 ms.
 SCHEDULES = {
     "plain 3.3 V": [(0, 3.3), (60, 0.0)],

@@ -5,7 +5,7 @@ the number of full solves it took.
 The mesh is sized for the band's highest frequency (the shortest wavelength) and its absorbers
 for the lowest (the longest), so one mesh serves the band. :func:`direct_sweep` solves the same
 mesh once per frequency with the exact PML of that frequency: the reference the reduced model
-is verified against (tests/fem/test_sweep.py) and measured against (bench/bench_sweep.py).
+is verified against (tests/fem/test_sweep.py) and measured against (bench/fem/sweep.py).
 """
 
 from __future__ import annotations

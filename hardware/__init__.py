@@ -14,8 +14,8 @@ The limits come from the device, the actuator's rated values and the user, never
 (:mod:`hardware.limits`, docs/protocol.md).
 
 The run-time path only: numpy, onnxruntime (through ``surrogate.runtime``), pyserial for the
-serial port, matplotlib for the simulated array's figures; never the FE solver, torch,
-scikit-learn or pysindy (an import-linter contract).
+serial port, matplotlib for the simulated array's figures; never the FE solver, torch or
+scikit-learn (an import-linter contract).
 """
 
 from hardware.backends import DEVICE_KINDS, open_device, parse_device

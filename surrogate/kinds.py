@@ -6,7 +6,7 @@ parity tolerance live in its own module (``surrogate/estimators/gp.py``, ``nn.py
 ``lgbm.py``). Adding a kind is one new module defining ``KIND`` plus its line in
 :data:`KINDS` (docs/architecture.md).
 
-Importing this module loads scikit-learn, torch and pysindy (about 5 s): the CLI imports it
+Importing this module loads scikit-learn and torch (about 5 s): the CLI imports it
 only when a command needs a kind, never to build its parser.
 """
 
@@ -28,7 +28,7 @@ __all__ = ["KINDS", "STEADY_KINDS", "SWEEP_KINDS", "get"]
 
 #: Options of the envelope model's identification (``--options`` of ``--kind rom``).
 _ROM_OPTIONS = ("harmonic", "max_nfev", "equivalent_loss",
-                "group_by_attachment", "learn_gain", "modes")
+                "group_by_attachment", "learn_gain", "modes", "quasi_static_share")
 
 
 def _train_rom(paths: Sequence[str | Path], out: str | Path, *, seed: int, overwrite: bool,
@@ -49,7 +49,8 @@ def _rom_report(card: Mapping[str, Any]) -> list[str]:
 
 #: The transient envelope model: identified from transient runs by its own pipeline
 #: (:mod:`surrogate.envelope.fit`), written as coefficients (not an ONNX graph).
-ROM = SurrogateKind(name="rom", summary="transient envelope model (sparse identification)",
+ROM = SurrogateKind(name="rom", summary="transient envelope model (grey box: motor law x "
+                    "harmonic NN x damped modes, fitted by least squares)",
                     trainer=_train_rom, report=_rom_report)
 
 #: Every kind, by name, in the order ``--help`` lists them. The GP and the NN also train on

@@ -36,7 +36,7 @@ __all__ = ["CARD_VERSION", "check_model", "check_model_out", "list_models", "mod
            "package_versions", "show_model", "write_model"]
 
 CARD_VERSION = 1
-_PACKAGES = ("hapticrom", "numpy", "scipy", "scikit-learn", "torch", "pysindy", "onnx",
+_PACKAGES = ("hapticrom", "numpy", "scipy", "scikit-learn", "torch", "onnx",
              "onnxscript", "skl2onnx", "onnxruntime")
 
 

@@ -248,7 +248,7 @@ def train(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     (:mod:`surrogate.intervals`; the card's ``interval_calibration``); the held-out metrics are
     then those of the calibrated intervals. None (the default): 0.1 when that is at least
     :data:`AUTO_CALIBRATION_ROWS` rows, else no calibration; 0: none."""
-    # Lazy: the registry loads torch, scikit-learn and pysindy (about 5 s); what else this
+    # Lazy: the registry loads torch and scikit-learn (about 5 s); what else this
     # module offers (load_datasets, evaluate, edge_radius_rule: refine, the studies) needs none.
     from surrogate.kinds import get as get_kind
 

@@ -1,7 +1,8 @@
 """Where the envelope model's steady-level error comes from, per held-out FE transient.
 
-    python bench/surrogate/rom_steady_levels.py            # 56 held-out runs (about 9 min, loaded)
+    python bench/surrogate/rom_steady_levels.py                # 56 held-out runs (about 9 min, loaded)
     python bench/surrogate/rom_steady_levels.py --limit 5 --json out.json
+    python bench/surrogate/rom_steady_levels.py --samples 195 71 --json out.json   # these runs only
 
 For each held-out run of ``datasets/transient`` the FE transient's "steady" level (the mean
 envelope over the 5 ms before the first switch-off, the card's definition,
@@ -137,12 +138,13 @@ def model_steady(model: Any, design: dict[str, Any], omega: float) -> np.ndarray
 
 def diagnose(limit: int | None = None, model_path: str | Path = ROOT / "models" / "rom-default",
              reuse: dict[int, dict[str, list[float]]] | None = None,
-             out_json: str | None = None) -> list[dict[str, Any]]:
+             out_json: str | None = None, samples: set[int] | None = None
+             ) -> list[dict[str, Any]]:
     """Per held-out run: f, attachment, rings, FE level, the card's settled flags and each
     kind's relative difference (center, edge). ``reuse``: sample_index -> the ``levels_um`` of
     an earlier run of this function on the same dataset (the FE solves are skipped for those
     rows: only the NN and the model are evaluated again). ``out_json``: the rows so far are
-    written there after each run."""
+    written there after each run. ``samples``: only these held-out rows (sample indices)."""
     from surrogate.data.store import Store
     from surrogate.envelope.fit import HOLDOUT_EVERY, run_from_row
     from surrogate.envelope.metrics import SETTLED_PTP, SETTLED_WINDOW_S, STEADY_WINDOW_S
@@ -157,6 +159,8 @@ def diagnose(limit: int | None = None, model_path: str | Path = ROOT / "models" 
     out = []
     for row in df.to_dict("records"):
         if int(row["sample_index"]) % HOLDOUT_EVERY != HOLDOUT_EVERY - 1:
+            continue
+        if samples is not None and int(row["sample_index"]) not in samples:
             continue
         run, _ = run_from_row(row, names)
         win = (run.t >= run.on_time_s - STEADY_WINDOW_S) & (run.t < run.on_time_s)
@@ -235,12 +239,19 @@ def main(argv: list[str] | None = None) -> int:
                     help="envelope model directory whose steady level is compared")
     ap.add_argument("--reuse", help="a --json file of an earlier run on the same dataset: its "
                     "FE levels are reused (only the NN and --model are evaluated again)")
+    ap.add_argument("--samples", type=int, nargs="+",
+                    help="only these held-out runs (sample indices, each % 4 == 3)")
     args = ap.parse_args(argv)
+    if args.samples and any(s % 4 != 3 for s in args.samples):
+        print(f"--samples {args.samples}: held-out runs only (sample_index % 4 == 3)",
+              file=sys.stderr)
+        return 2
     reuse = None
     if args.reuse:
         reuse = {int(r["sample_index"]): r["levels_um"]
                  for r in json.loads(Path(args.reuse).read_text())}
-    rows = diagnose(args.limit, args.model, reuse, args.json)
+    rows = diagnose(args.limit, args.model, reuse, args.json,
+                    set(args.samples) if args.samples else None)
     for line in summary(rows):
         print(line)
     return 0

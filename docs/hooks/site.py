@@ -3,7 +3,7 @@
 * Before the build, every ```python block of README.md runs, each in a fresh interpreter from
   the repository root; one that fails stops the build naming the block's first line and the
   error (so a README example that no longer works fails ``make docs`` and ``make test``).
-* A link from a page to a file of the repository outside docs/ (``../bench/bench_fem.py``)
+* A link from a page to a file of the repository outside docs/ (``../bench/fem/accuracy.py``)
   becomes that path in code type: the site has no page for it, and the text still says
   where to look. A link to a file that exists nowhere is left for mkdocs to report.
 """

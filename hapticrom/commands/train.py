@@ -3,7 +3,8 @@
     hapticrom train --data datasets/default --kind nn --out models/default-nn
     hapticrom train --data datasets/default datasets/lab --kind gp --out models/gp --overwrite
     hapticrom train --data datasets/default --kind mlp --out models/mlp-baseline
-    hapticrom train --data datasets/transient --kind rom --out models/rom-default
+    hapticrom train --data datasets/transient --kind rom --out models/rom-default \
+        --options '{"quasi_static_share": true}'
     hapticrom train --data datasets/default --kind nn --outputs profile_um,profile_normal_um \
         --out models/nn-normal
     hapticrom train --data datasets/default-sweep --kind nn --out models/nn-sweep   # sweeps
@@ -33,7 +34,7 @@ def _options(text: str | None) -> dict:
 
 
 def _run(args: argparse.Namespace) -> int:
-    # Lazy: the registry loads scikit-learn, torch and pysindy (about 5 s measured with
+    # Lazy: the registry loads scikit-learn and torch (about 5 s measured with
     # `python -X importtime -c "import surrogate.kinds"`), which every other command and
     # `hapticrom --help` would pay for.
     from surrogate import kinds

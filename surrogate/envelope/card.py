@@ -29,6 +29,14 @@ def finite(obj: Any) -> Any:
     return obj
 
 
+def _dynamics(model: EnvelopeModel) -> str:
+    """What carries the dynamics, in words."""
+    if "quasi_static_share" in model.meta:
+        return "a learned quasi-static share and one learned rotating-frame mode"
+    return f"{'one' if model.modes == 1 else 'two'} learned rotating-frame " \
+           f"mode{'' if model.modes == 1 else 's'}"
+
+
 def card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[Any],
           hashes: Sequence[str], harmonic: Any, hcard: Mapping[str, Any], n_train: int,
           n_held: int, seed: int, metrics: dict[str, Any]) -> dict[str, Any]:
@@ -51,8 +59,7 @@ def card(model: EnvelopeModel, coefficients: Mapping[str, Any], data: Sequence[A
         "interface": "surrogate.runtime.rom.load_envelope_model(path).simulate(t_s, volts, "
                      "design)",
         "model": "grey box: motorlaw speed x harmonic steady response at the instantaneous "
-                 f"speed x {'one' if model.modes == 1 else 'two'} learned rotating-frame "
-                 f"mode{'' if model.modes == 1 else 's'} per point (surrogate.runtime.rom)",
+                 f"speed x {_dynamics(model)} per point (surrogate.runtime.rom)",
         "inputs": inputs,
         "coefficients": COEFFICIENTS_FILE,
         "harmonic": {"card": HARMONIC_CARD_FILE, "graph": HARMONIC_GRAPH_FILE,

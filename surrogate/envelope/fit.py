@@ -20,8 +20,13 @@ features (one map per attachment by default, ``group_by_attachment``):
 3. The weights are refined jointly over all training runs by nonlinear least squares
    (scipy) on the envelope error relative to each run's FE peak.
 
-The choice of correction (one rotating-frame mode vs a plain first-order lag of the steady
-response) was made by measurement: see docs/transient-model.md.
+With ``quasi_static_share`` (the shipped ``models/rom-default``) a share w of the steady
+response passes through at once beside the mode (per run refined after the one-mode fit, then
+mapped and refined jointly like the mode). The choice of correction (one rotating-frame mode vs
+a plain first-order lag of the steady response, the share) was made by measurement, and so
+was the fit itself: SINDy with control (pysindy) identifying what the one-mode model lacks
+lost to it on the held-out runs (``bench/surrogate/envelope_sindy.py``); see
+docs/transient-model.md.
 """
 
 from __future__ import annotations
@@ -73,6 +78,9 @@ RIDGE = 1e-2
 # FAST_FACTOR, mode 2 slower by SLOW_FACTOR at FN2_FACTOR f_n, mode 1's share w
 FAST_FACTOR, SLOW_FACTOR, FN2_FACTOR = (1.0, 2.0), (0.15, 0.4), (0.7, 1.0)
 SHARE_START = (0.5, 0.75, 0.95)
+# quasi_static_share: mode 1 held this fast (a 0.2 ms lag: the force passed through at once);
+# mode 2 starts at the run's one-mode fit with the quasi-static share w at QS_SHARE_START
+QS_SIGMA, QS_FN, QS_SHARE_START = 5000.0, 50.0, 0.2
 # per-run bounds of the parameters (PARAMS, then MODE2_PARAMS)
 LOWER = (math.log(2.0), 5.0, -4.0, -4.0, math.log(2.0), 5.0, -3.0)
 UPPER = (math.log(5000.0), 400.0, 4.0, 4.0, math.log(5000.0), 400.0, 3.0)
@@ -172,7 +180,7 @@ def _refine_runs(t: NDArray, omega: NDArray, env: NDArray, amp: NDArray, grid: N
 
 def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
                 grid: NDArray, *, max_nfev: int = 40, intercepts: Sequence[int] = (-1,),
-                learn_gain: bool = True, modes: int = 1
+                learn_gain: bool = True, modes: int = 1, share: bool = False
                 ) -> tuple[dict[str, NDArray], dict[str, Any]]:
     """Weights (point -> (n_params, nf + 1)) of ``params_for(modes)`` over ``features``
     (nb, nf + 1, intercept last; ``intercepts``: the intercept columns, one per group) from
@@ -180,7 +188,9 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
     report: grid start, per-run refinement, ridge regression across runs, joint refinement.
     Without ``learn_gain`` the gain is 1 and its slope 0: the steady level is the harmonic
     model's. With ``modes`` = 2 the per-run one-mode fit starts the second mode
-    (:func:`_second_mode_start`), refined per run before the ridge regression."""
+    (:func:`_second_mode_start`), refined per run before the ridge regression; with ``share``
+    (and ``modes`` = 2) mode 1 is held at ``QS_SIGMA``, ``QS_FN`` (a quasi-static share w of
+    the steady response) and mode 2, started at the one-mode fit, carries the dynamics."""
     params = params_for(modes)
     weights, report = {}, {}
     ridge = RIDGE * np.eye(features.shape[1])
@@ -191,7 +201,13 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
         start = _refine_runs(t, omega, env, a, grid, keep,
                              _grid_start(t, omega, env, a, grid, keep, len(free)), max_nfev,
                              free)
-        if modes == 2:
+        if modes == 2 and share:
+            free = [k for k in free if k > 1] + [4, 5, 6]
+            nb = start.shape[0]
+            start = _refine_runs(t, omega, env, a, grid, keep, np.column_stack([
+                np.full(nb, math.log(QS_SIGMA)), np.full(nb, QS_FN), start[:, 2:4],
+                start[:, :2], np.full(nb, QS_SHARE_START)]), max_nfev, free)
+        elif modes == 2:
             free += [4, 5, 6]
             start = _refine_runs(t, omega, env, a, grid, keep,
                                  _second_mode_start(t, omega, env, a, grid, keep, start),
@@ -199,6 +215,8 @@ def fit_weights(runs: Sequence[Run], features: NDArray, amp: dict[str, NDArray],
         w0 = np.linalg.solve(features.T @ features + ridge, features.T @ start).T  # (np, nf+1)
         fixed = [k for k in range(len(params)) if k not in free]
         w0[fixed] = 0.0  # gain rows held: log g = 0, slope 0
+        if share:  # the quasi-static mode 1: constant in every group
+            w0[0, list(intercepts)], w0[1, list(intercepts)] = math.log(QS_SIGMA), QS_FN
 
         def full(w: NDArray, w0=w0, free=free) -> NDArray:
             out = w0.copy()
@@ -248,7 +266,7 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
           "models/nn-wide", seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
           group_by_attachment: bool = True, learn_gain: bool = False,
-          modes: int = 1) -> dict[str, Any]:
+          modes: int = 1, quasi_static_share: bool = False) -> dict[str, Any]:
     """Fit on the training rows of ``data`` (sample_index % 4 != 3), validate on the held-out
     rows, register ``out`` (card + coefficients + the harmonic model's card and graph, written
     atomically by :func:`surrogate.registry.write_model`); returns the card. ``max_nfev``
@@ -258,7 +276,9 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     ``learn_gain``: fit a gain g exp(s (f - 130 Hz) / 50 Hz) on the harmonic model's level
     (off by default: the harmonic model's own level is the steady state). ``modes``: damped
     modes per point, 1 (default, chosen by measurement) or 2
-    (:mod:`surrogate.runtime.rom_modes`)."""
+    (:mod:`surrogate.runtime.rom_modes`). ``quasi_static_share``: one mode plus a share w of
+    the steady response passed through at once (written as two modes, the first held at
+    ``QS_SIGMA``; docs/transient-model.md)."""
     out = Path(out)
     check_model_out(out, overwrite)  # before the work: the output may not be replaced
     if isinstance(max_nfev, bool) or not isinstance(max_nfev, int) or not 1 <= max_nfev <= 1000:
@@ -268,6 +288,10 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
                          "false")
     if type(modes) is not int or modes not in (1, 2):
         raise ValueError(f"modes = {modes!r}: allowed 1 or 2 (damped modes per point)")
+    if not isinstance(quasi_static_share, bool) or (quasi_static_share and modes != 1):
+        raise ValueError(f"quasi_static_share = {quasi_static_share!r}: allowed true (with "
+                         "modes 1: it adds the quasi-static share) or false")
+    modes = 2 if quasi_static_share else modes
     params = params_for(modes)
     hcard = read_card(harmonic)
     if hcard.get("kind") != "nn" or "frequency_hz" not in [i["name"] for i in hcard["inputs"]]:
@@ -292,6 +316,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
                    "weights": {p: np.zeros((len(params), len(cols) + 1)).tolist()
                                for p in POINTS},
                    "clip": {k: [-1e6, 1e6] for k in params}}
+    if quasi_static_share:
+        provisional["quasi_static_share"] = {"sigma_1_s": QS_SIGMA, "fn_hz": QS_FN}
     if group_by_attachment:  # one affine map of the mode per attachment
         choices = next(s.choices for s in predictor.specs if s.name == "attachment")
         provisional["group_by"] = {"input": "attachment", "choices": list(choices)}
@@ -311,7 +337,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
     weights, report = fit_weights(train_runs, feats, {p: np.stack(v) for p, v in amp.items()},
                                   shell.grid_hz, max_nfev=max_nfev, intercepts=[
                                       (j + 1) * (len(cols) + 1) - 1 for j in range(n_groups)],
-                                  learn_gain=learn_gain, modes=modes)
+                                  learn_gain=learn_gain, modes=modes,
+                                  share=quasi_static_share)
     rows = np.concatenate([feats @ w.T for w in weights.values()])
     clip = {name: [float(rows[:, i].min()), float(rows[:, i].max())]
             for i, name in enumerate(params)}

@@ -1,5 +1,5 @@
-"""Run-time prediction with numpy and onnxruntime only (no torch, scikit-learn, pysindy or
-FE solver): ``load_predictor(path).predict(X)`` for the steady amplitudes and profiles,
+"""Run-time prediction with numpy and onnxruntime only (no torch, scikit-learn or FE
+solver): ``load_predictor(path).predict(X)`` for the steady amplitudes and profiles,
 ``load_envelope_model(path).simulate(t_s, volts, design)`` for the transient envelope;
 ``load_model(name_or_path)`` for either, by name (installed model packages) or path."""
 

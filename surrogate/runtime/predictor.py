@@ -16,7 +16,7 @@ columns form the (n, m) output ``NAME``), e.g. ``profile_normal_um``, the normal
 input); out-of-range points raise unless ``extrapolate=True``, which adds a boolean
 ``extrapolated`` array instead.
 
-This module must stay importable without torch, scikit-learn, pysindy or the FE solver.
+This module must stay importable without torch, scikit-learn or the FE solver.
 """
 
 from __future__ import annotations

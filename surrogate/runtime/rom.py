@@ -9,15 +9,18 @@ learns only a small dynamic remainder (coefficients from ``surrogate.envelope.fi
 2. **Steady response at the instantaneous speed**: A(omega), um, the harmonic model (an NN
    with a ``frequency_hz`` input, shipped inside this model's directory as ``harmonic.onnx``
    with its card; ``models/rom-default`` carries ``models/nn-wide``, trained over the motor's
-   whole speed range, 20-250 Hz) of that design at f = omega / 2 pi, times a learned design
-   gain g (the harmonic model is trained on hysteretic damping, a finer mesh and a PML; the FE
+   whole speed range, 20-250 Hz) of that design at f = omega / 2 pi, times a design gain g
+   (the harmonic model is trained on hysteretic damping, a finer mesh and a PML; the FE
    transients of ``datasets/transient`` stand in for the hysteretic loss with the causal band
    model of ``fem.viscoelastic``, its closest causal counterpart). The gain may vary over the
-   harmonic model's band [f_low, f_high]: g exp(s (f - 130 Hz) / 50 Hz), s learned too, f
-   clamped into the band. Below f_low (the first frequency of ``grid_hz``, the harmonic
-   model's lowest trained frequency) the response is continued with the unbalance force
-   m e omega^2 through the identified mode: A(omega) = A(omega_low) (omega / omega_low)^2
-   |i omega_low - lambda| / |i omega - lambda| (:mod:`surrogate.runtime.rom_steady`).
+   harmonic model's band [f_low, f_high]: g exp(s (f - 130 Hz) / 50 Hz), f clamped into the
+   band; g and s are learned only when the fit is asked to (``learn_gain``): in
+   ``models/rom-default`` g = 1 and s = 0 (chosen by measurement, docs/transient-model.md),
+   so its steady level is the harmonic model's. Below f_low (the first frequency of
+   ``grid_hz``, the harmonic model's lowest trained frequency) the response is continued
+   with the unbalance force m e omega^2 through the identified mode: A(omega) =
+   A(omega_low) (omega / omega_low)^2 |i omega_low - lambda| / |i omega - lambda|
+   (:mod:`surrogate.runtime.rom_steady`).
 3. **Dynamic correction**: one damped mode lambda = -sigma + i 2 pi f_n per point (unit and
    tissue lag, the beat when the rotor passes the mode, the ring-down after switch-off), seen
    from the frame rotating with the force: ``dz/dt = (lambda - i omega) z + (i omega - lambda)
@@ -26,12 +29,15 @@ learns only a small dynamic remainder (coefficients from ``surrogate.envelope.fi
    with omega and A held at their step averages. Optionally (``coefficients.modes`` = 2) two
    modes per point, z = z_1 + z_2, mode 1 forced with a share w of the force and mode 2 with
    1 - w, so the steady state is still A (:mod:`surrogate.runtime.rom_modes`); the continuation
-   below the band goes through mode 1.
+   below the band goes through mode 1. ``models/rom-default`` is such a model fitted with
+   ``quasi_static_share`` (recorded in its coefficients): mode 1 held at sigma = 5,000 1/s
+   passes its share w of A through at once and mode 2 carries the lag and the ring-down.
 
 The mode (log sigma, f_n), log g and s (two modes: also log sigma_2, f_2, w) are affine in
 the harmonic model's encoded design features (its own encoding, frequency column left out; with
 ``group_by`` in the coefficients one map per choice of that input, e.g. glued / pogo), fitted
-on FE transients. Designs the FE
+on FE transients by nonlinear least squares (``surrogate.envelope.fit``: per-run grid search and
+refinement, ridge regression on the features, joint refinement). Designs the FE
 transient cannot run (a unit on pogo pins with no rings drifts away) are refused.
 
 The model knows its actuator: ``coefficients.actuator`` (a ``motorlaw`` drive-law name; absent
@@ -221,8 +227,9 @@ class EnvelopeModel:
     def steady_levels(self, omega: Any, design: Mapping[str, Any], *,
                       extrapolate: bool = False) -> dict[str, NDArray]:
         """point -> the model's steady envelope (um) at the speeds ``omega`` (rad/s, any
-        shape (n,)): what the envelope tends to while the speed is held (the learned gain times
-        the harmonic response, continued below its band; :func:`steady_response`)."""
+        shape (n,)): what the envelope tends to while the speed is held (the gain, 1 unless
+        learned, times the harmonic response, continued below its band;
+        :func:`steady_response`)."""
         rows = self.parameter_rows(design, extrapolate=extrapolate)
         return self._steady(np.atleast_1d(np.asarray(omega, dtype=float)), rows, design,
                             extrapolate)

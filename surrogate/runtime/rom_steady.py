@@ -1,8 +1,8 @@
 """The envelope model's steady response A(omega) (numpy only; used by
 :mod:`surrogate.runtime.rom` and its fit, :mod:`surrogate.envelope.fit`): the harmonic model's
-amplitudes on its trained band, interpolated at the instantaneous speed, continued below the band
-with the unbalance force m e omega^2 through mode 1, times the learned gain
-g exp(s (f - 130 Hz) / 50 Hz) with f clamped into the band.
+amplitudes on its trained band, interpolated at the instantaneous speed, continued below the band with the
+unbalance force m e omega^2 through mode 1, times the gain g exp(s (f - 130 Hz) / 50 Hz) with f
+clamped into the band (g = 1, s = 0 unless the fit learned them: ``learn_gain``).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def harmonic_grid(harmonic: Predictor) -> NDArray:
 
 def steady_response(omega: NDArray, grid_hz: NDArray, amplitude: NDArray, sigma: NDArray,
                     fn_hz: NDArray, gain: NDArray, slope: NDArray) -> NDArray:
-    """The model's steady response (nb, nt) at the speeds ``omega``: the learned gain times
+    """The model's steady response (nb, nt) at the speeds ``omega``: the gain times
     the harmonic amplitudes continued below the band (:func:`gain_factor`,
     :func:`continued_steady`; per-batch parameters ``sigma`` 1/s, ``fn_hz`` Hz, ``gain``,
     ``slope``, each (nb,))."""

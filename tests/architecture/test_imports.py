@@ -36,7 +36,8 @@ LAZY_MODULES = {
     "emcee": "the `calibration` extra: only the sampler needs it",
     "distributed": "dask, the `datasets` extra: only the Dask backend needs it",
     "tqdm": "progress bars, drawn only on a terminal",
-    "pysindy": "the `train` extra; only identifying the envelope model needs it",
+    "pysindy": "not a dependency: only the SINDy measurement (studies/envelope_sindy, "
+               "bench/surrogate/envelope_sindy.py, which says how to install it) imports it",
     "lightgbm": "the `bench` extra: only fitting the LightGBM peer needs it "
                 "(surrogate/estimators/lgbm.py, the output-choice study)",
     "optuna": "0.22 s, the `design` extra: only `search.optimiser = \"tpe\"` needs it",
@@ -48,7 +49,7 @@ LAZY_PLACES = {
     ("hapticrom/outputs.py", "surrogate.registry"):
         "loads onnxruntime: 0.16 s of the 0.4 s of `hapticrom --help`",
     ("surrogate/train.py", "surrogate.kinds"):
-        "the registry loads torch, scikit-learn and pysindy (5 s); load_datasets and "
+        "the registry loads torch and scikit-learn (5 s); load_datasets and "
         "evaluate (refine, the studies) need none of it",
     ("surrogate/data/pool.py", "fem.simulation"):
         "worker warm-up: imported in each worker process as it starts, not in the parent",

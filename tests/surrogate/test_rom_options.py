@@ -158,6 +158,33 @@ def test_two_modes_are_identified_back(model):
         assert report[point]["refined_rms"] < 1e-3
 
 
+def test_a_quasi_static_share_and_one_mode_are_identified_back(model):
+    """Runs made by a quasi-static share w of the steady response (mode 1 held at QS_SIGMA)
+    beside one mode: the fit holds mode 1 and recovers the mode and the share."""
+    from surrogate.envelope import fit as rom
+
+    truth = [math.log(rom.QS_SIGMA), rom.QS_FN, 0.0, 0.0, math.log(40.0), 45.0, 0.3]
+    runs, amps = _synthetic_runs(model, [truth])
+    weights, report = rom.fit_weights(runs, np.ones((len(runs), 1)), amps, model.grid_hz,
+                                      learn_gain=False, modes=2, share=True)
+    for point in ("center", "edge"):
+        w = weights[point][:, 0]
+        assert w[:4] == pytest.approx([math.log(rom.QS_SIGMA), rom.QS_FN, 0.0, 0.0])  # held
+        assert math.exp(w[4]) == pytest.approx(40.0, rel=0.02)
+        assert w[5] == pytest.approx(45.0, abs=0.5)
+        assert w[6] == pytest.approx(0.3, abs=0.01)
+        assert report[point]["refined_rms"] < 1e-3
+
+
+def test_the_quasi_static_share_option_is_checked(tmp_path):
+    from surrogate.envelope import fit as rom
+
+    for bad in ({"quasi_static_share": 1}, {"quasi_static_share": True, "modes": 2}):
+        with pytest.raises(ValueError, match="quasi_static_share"):
+            rom.train(["unused"], tmp_path / "out", **bad)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("share", [0.7, 1.6, -0.5])
 def test_two_modes_settle_on_the_steady_response_exactly(share):
     """c_1 = w, c_2 = 1 - w: at constant speed z_1 + z_2 = A, whatever the (real) share."""
@@ -188,7 +215,7 @@ def test_a_two_mode_model_runs_from_its_coefficients_and_settles_on_the_harmonic
                                    rtol=1e-12, atol=1e-12)
 
 
-def test_one_mode_output_is_unchanged(model):
+def test_one_mode_output_is_unchanged():
     """The one-mode recurrence of the model before two modes, step by step: the shared
     integration gives the same numbers bit for bit, and a model recording ``modes: 1`` is the
     model that records nothing."""
@@ -205,13 +232,17 @@ def test_one_mode_output_is_unchanged(model):
     for k in range(h.size):
         ref[:, k + 1] = qm[:, k] + (ref[:, k] - qm[:, k]) * decay[:, k]
     assert np.array_equal(mode_response(t, omega, q, sigma, fn), np.abs(ref))
+    # a one-mode model made of the shipped coefficients' one-mode rows (the shipped model has
+    # two: the quasi-static share), recorded as modes 1 and as a model written before the field
     coef = json.loads((SHIPPED / "coefficients.json").read_text())
-    assert coef["modes"] == 1
+    one = {**{k: v for k, v in coef.items() if k != "quasi_static_share"}, "modes": 1,
+           "weights": {p: w[:len(params_for(1))] for p, w in coef["weights"].items()},
+           "clip": {k: coef["clip"][k] for k in params_for(1)}}
     hcard = json.loads((SHIPPED / "harmonic_card.json").read_text())
-    # a model written before the field (no "modes" key) reads as one mode
-    unrecorded = model_from_parts({k: v for k, v in coef.items() if k != "modes"}, hcard,
-                                  SHIPPED / "harmonic.onnx")
-    a, b = (m.simulate(t, volts, DESIGN) for m in (model, unrecorded))
+    recorded, unrecorded = (model_from_parts(c, hcard, SHIPPED / "harmonic.onnx") for c in
+                            (one, {k: v for k, v in one.items() if k != "modes"}))
+    assert recorded.modes == unrecorded.modes == 1
+    a, b = (m.simulate(t, volts, DESIGN) for m in (recorded, unrecorded))
     for k in a:
         assert np.array_equal(a[k], b[k])
 
