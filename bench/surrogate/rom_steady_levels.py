@@ -1,6 +1,6 @@
 """Where the envelope model's steady-level error comes from, per held-out FE transient.
 
-    python bench/surrogate/rom_steady_levels.py                # 56 held-out runs (about 9 min, loaded)
+    python bench/surrogate/rom_steady_levels.py        # 56 held-out runs (about 9 min, loaded)
     python bench/surrogate/rom_steady_levels.py --limit 5 --json out.json
     python bench/surrogate/rom_steady_levels.py --samples 195 71 --json out.json   # these runs only
 

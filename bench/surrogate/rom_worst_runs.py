@@ -1,6 +1,7 @@
 """The envelope model's ten worst held-out runs (steady level, rise, decay), each with its cause.
 
-    python bench/surrogate/rom_worst_runs.py [--model models/rom-default] [--data datasets/transient]
+    python bench/surrogate/rom_worst_runs.py [--model models/rom-default] \
+        [--data datasets/transient]
         [--n 10] [--steady-levels FE.json]
 
 Ranks the held-out runs of the model's card (``metrics.held_out.runs``) by the larger of the
@@ -13,7 +14,8 @@ its schedule):
   with two modes the second, and w, the first's share: with ``quasi_static_share`` the share
   of the steady response passed through at once);
 - steady: whether the FE envelope had settled (the card's test), the model high or low, and,
-  with ``--steady-levels`` (the ``--json`` of ``bench/surrogate/rom_steady_levels.py`` on these runs),
+  with ``--steady-levels`` (the ``--json`` of ``bench/surrogate/rom_steady_levels.py`` on these
+  runs),
   the split of the error into the harmonic NN's own (``model_vs_hyst``: the model's level
   against a hysteretic harmonic solve on the transient's mesh), the damping model
   (``own_vs_hyst``: the band model's steady state against the hysteretic one) and the FE
@@ -241,7 +243,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--model", default=str(ROOT / "models" / "rom-default"))
     ap.add_argument("--data", default=str(ROOT / "datasets" / "transient"))
     ap.add_argument("--n", type=int, default=10, help="runs per table")
-    ap.add_argument("--steady-levels", help="the --json of bench/surrogate/rom_steady_levels.py: splits "
+    ap.add_argument("--steady-levels",
+                    help="the --json of bench/surrogate/rom_steady_levels.py: splits "
                     "the steady errors of the runs it holds into NN, damping and window")
     args = ap.parse_args(argv)
     if args.n < 1:

@@ -1,8 +1,8 @@
 """The envelope model's steady response A(omega) (numpy only; used by
 :mod:`surrogate.runtime.rom` and its fit, :mod:`surrogate.envelope.fit`): the harmonic model's
-amplitudes on its trained band, interpolated at the instantaneous speed, continued below the band with the
-unbalance force m e omega^2 through mode 1, times the gain g exp(s (f - 130 Hz) / 50 Hz) with f
-clamped into the band (g = 1, s = 0 unless the fit learned them: ``learn_gain``).
+amplitudes on its trained band, interpolated at the instantaneous speed, continued below the band
+with the unbalance force m e omega^2 through mode 1, times the gain g exp(s (f - 130 Hz) / 50 Hz)
+with f clamped into the band (g = 1, s = 0 unless the fit learned them: ``learn_gain``).
 """
 
 from __future__ import annotations
