@@ -27,10 +27,13 @@ OPTIONS = {"hidden": (16, 16), "n_members": 3, "max_epochs": 60, "centre_modes":
            "refit_epochs": 4, "refit_patience": 2}
 
 
-def coarse_space_dict() -> dict[str, Any]:
-    """The default sweep space with a coarser band and profile grid (same inputs, 40 mm)."""
+def coarse_space_dict(seed: int | None = None) -> dict[str, Any]:
+    """The default sweep space with a coarser band and profile grid (same inputs, 40 mm), at
+    its own Sobol seed unless ``seed`` is given."""
     d = tomllib.loads(SPACE_FILE.read_text())
     d["space"]["name"] = "default-sweep-coarse"
+    if seed is not None:
+        d["space"]["seed"] = seed
     d["band"] = {**BAND}
     d["base"]["output"]["profile_step_mm"] = PROFILE_STEP_MM
     return d
@@ -56,15 +59,20 @@ def response(values: dict[str, Any], band_hz: np.ndarray, grid_mm: np.ndarray,
                            meta={"dofs": 100, "elements": 40, "warnings": []})
 
 
-def make_dataset(path: Path, n: int) -> Path:
-    """``n`` Sobol designs of the coarse space, written as ``hapticrom generate`` writes."""
+def make_dataset(path: Path, n: int, seed: int | None = None,
+                 band: dict[str, float] | None = None) -> Path:
+    """``n`` Sobol designs of the coarse space (``seed``: another Sobol seed; ``band``: another
+    band), written as ``hapticrom generate`` writes."""
     from surrogate.data.provenance import solver_info
     from surrogate.data.space import space_from_dict
     from surrogate.data.store import Store, new_manifest
     from surrogate.data.worker import edge_radius_mm, outputs_from_result
 
-    space = space_from_dict(coarse_space_dict(), check_scenes=False)
-    band_hz = np.round(np.arange(BAND["start"], BAND["stop"] + 1e-9, BAND["step"]), 9)
+    d = coarse_space_dict(seed)
+    d["band"] = {**d["band"], **(band or {})}
+    space = space_from_dict(d, check_scenes=False)
+    b = d["band"]
+    band_hz = np.round(np.arange(b["start"], b["stop"] + 1e-9, b["step"]), 9)
     grid_mm = np.arange(0.0, 40.0 + 1e-9, PROFILE_STEP_MM)
     manifest = {**new_manifest(space, solver_info(git=False)), "profile_grid_mm": grid_mm.tolist()}
     store = Store.create(path, space, **manifest)
