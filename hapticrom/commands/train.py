@@ -57,6 +57,11 @@ def _run(args: argparse.Namespace) -> int:
                calibration_fraction=args.calibration_fraction, **more)
     for line in kind.report(card):
         print(line)
+    if "test_set" in card:  # --test-data: the fresh designs' figures beside the held-out ones
+        t = card["test_set"]
+        print(f"test set: {t['designs']} designs ({t['pairs']} pairs)")
+        for name, m in t["metrics"].items():
+            print(f"  {name:22s} " + "  ".join(f"{k} {v:.4g}" for k, v in m.items()))
     print(f"wrote {args.out}")
     return 0
 

@@ -23,6 +23,7 @@ from calibration.synthetic import REFERENCE_DESIGNS
 from hapticrom.cli import main
 from hapticrom.documents import schema
 from surrogate.runtime import load_predictor
+from surrogate.runtime.card import read_card
 from surrogate.runtime.defaults import default_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "hapticrom"))
@@ -107,7 +108,7 @@ def test_rows_without_a_normal_output_are_refused_by_name(normal):
 
 def test_calibrate_picks_the_default_normal_model_for_an_ldv_measurement(tmp_path, capsys):
     """nn-normal, or nn-sweep once trained with the normal component (the defaults)."""
-    name = Path(default_model("normal")).name
+    name = read_card(default_model("normal"))["name"]
     out = tmp_path / "cal.json"
     assert main(["calibrate", LDV, "--fit", FIT3, *QUICK, "--out", str(out),
                  "--plot", str(tmp_path / "cal.png"), "--verify"]) == 0
