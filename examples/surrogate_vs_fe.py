@@ -49,7 +49,8 @@ def main() -> None:
                         "surrogate.runtime.defaults)")
     args = parser.parse_args()
     if args.models is None:
-        args.models = [str(default_model_path(role)) for role in ("harmonic", "gp")]
+        args.models = [str(default_model_path(role))
+                       for role in ("harmonic", "gaussian_process")]
     points = design_points(HERE / "designs.csv")
 
     fe = []

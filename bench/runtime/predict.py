@@ -268,7 +268,7 @@ def main() -> None:
                     "CHUNK_ROWS values, e.g. 256,512,1024")
     args = ap.parse_args()
     if args.models is None:
-        args.models = [default_model("harmonic"), default_model("gp")]
+        args.models = [default_model("harmonic"), default_model("gaussian_process")]
     for name in args.models:
         if args.chunk_rows:
             chunk_rows(name, [int(v) for v in args.chunk_rows.split(",")], args.rounds,

@@ -10,9 +10,9 @@ Every command that takes a model and is given none asks :func:`default_model` fo
 * ``envelope_harmonic``: the harmonic model the envelope fit takes its steady part from
   (``hapticrom train --kind rom``; the envelope model carries a copy of it, so
   ``models/rom-default`` switches when it is trained again, docs/sweep-models.md);
-* ``gp``: the shipped Gaussian process, the peer with its own intervals that the benches and
-  the FE comparison example run beside the network (``bench/runtime/predict.py``,
-  ``examples/surrogate_vs_fe.py``).
+* ``gaussian_process``: the shipped Gaussian process, the peer with its own intervals that
+  the benches and the FE comparison example run beside the network
+  (``bench/runtime/predict.py``, ``examples/surrogate_vs_fe.py``).
 
 Each role lists its candidates in order of preference: the sweep-trained models first
 (``nn-sweep``: trained on the complex band of ``datasets/spaces/default-sweep.toml``, its
@@ -37,7 +37,7 @@ DEFAULT_MODELS: dict[str, tuple[str, ...]] = {
     "harmonic": ("nn-sweep", "nn-default"),
     "normal": ("nn-sweep", "nn-normal"),
     "envelope_harmonic": ("nn-sweep", "nn-wide"),
-    "gp": ("gp-sweep", "gp-default"),
+    "gaussian_process": ("gp-sweep", "gp-default"),
 }
 #: role -> the outputs a candidate's card must list to serve it
 ROLE_OUTPUTS: dict[str, tuple[str, ...]] = {"normal": ("profile_normal_um",)}
