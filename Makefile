@@ -34,11 +34,11 @@ demo: $(STAMP)
 	done
 	$(BIN)/hapticrom simulate examples/unit-sweep.toml --json out/unit-sweep.json --plot out/unit-sweep.png
 	$(BIN)/hapticrom models list --root models
-	$(BIN)/hapticrom predict models/nn-default --csv examples/designs.csv --json out/designs-nn.json
+	$(BIN)/hapticrom predict --csv examples/designs.csv --json out/designs-nn.json
 	$(BIN)/python examples/surrogate_vs_fe.py
 	$(BIN)/hapticrom plan examples/forearm-layout.toml --out out/plan.json --plot out/plan.png
 	$(BIN)/hapticrom play out/plan.json examples/pattern-sweep.toml --device sim --out out/play --overwrite
-	$(BIN)/hapticrom calibrate examples/measurement-forearm.csv --model models/nn-default \
+	$(BIN)/hapticrom calibrate examples/measurement-forearm.csv \
 	  --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor --out out/calibration.json --plot out/calibration.png
 	$(BIN)/hapticrom plan examples/forearm-layout.toml --tissue out/calibration.json --out out/plan-person.json
 	# the unit search; exit 3 = the FE refutes the winner by plan --verify's 2 % pitch rule

@@ -9,9 +9,10 @@ Which model output a point reads is set by its reference and its component:
   profile output at distance d from the edge, log-linearly interpolated on the model's
   profile grid (its log-std linearly);
 * component ``magnitude``: ``center_amplitude_um`` / ``profile_um``; component ``normal``:
-  the outputs listed in :data:`NORMAL_OUTPUTS` (``models/nn-normal`` returns
-  ``profile_normal_um``, |U_z| on the skin around the unit, trained on the datasets'
-  ``profile_uz_um``). The datasets store no normal component at the unit's own face, so no
+  the outputs listed in :data:`NORMAL_OUTPUTS` (``models/nn-normal`` and a sweep model trained
+  with ``--outputs profile_um,profile_normal_um`` return ``profile_normal_um``, |U_z| on the
+  skin around the unit, trained on the datasets' ``profile_uz_um`` or the sweep's complex z
+  component). The datasets store no normal component at the unit's own face, so no
   shipped model predicts one there: a normal-component row at the face is refused by name, as
   is every normal-component row for a model without a normal output.
 
@@ -127,9 +128,10 @@ class ForwardModel:
                 errors.append((f"{where}: component", f"{where}, column component: "
                                f"{p.component!r}: the model {model!r} predicts no normal "
                                "component (its outputs are magnitudes); use a model with a "
-                               f"normal-component output ({NORMAL_OUTPUTS['profile'][0]}: "
-                               "models/nn-normal, which hapticrom calibrate picks when --model "
-                               "is not given) or give component = magnitude"))
+                               f"normal-component output ({NORMAL_OUTPUTS['profile'][0]}: the "
+                               "default normal model, which hapticrom calibrate picks when "
+                               "--model is not given: models/nn-sweep when trained with it, "
+                               "else models/nn-normal) or give component = magnitude"))
                 continue
             if output is None:
                 errors.append((f"{where}: component", f"{where}, column component: "

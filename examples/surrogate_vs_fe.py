@@ -1,6 +1,7 @@
 """The shipped surrogates beside the finite-element solver on the paper's three prototypes.
 
     .venv/bin/python examples/surrogate_vs_fe.py [--models models/nn-default models/gp-default]
+    (default: the shipped network and GP of surrogate.runtime.defaults)
 
 Each prototype scene (``examples/unit-*.toml``: forearm with the sourced tissue damping, 120 Hz)
 is solved by ``fem.simulate`` and predicted by every model from the matching design point of
@@ -20,6 +21,7 @@ import numpy as np
 
 from fem import load_scene, simulate
 from surrogate.runtime import load_predictor
+from surrogate.runtime.defaults import default_model_path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -42,9 +44,13 @@ def design_points(path: Path) -> dict[str, np.ndarray]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--models", nargs="+", default=[str(ROOT / "models" / "nn-default"),
-                                                        str(ROOT / "models" / "gp-default")])
+    parser.add_argument("--models", nargs="+", default=None,
+                        help="model directories (default: the shipped network and GP, "
+                        "surrogate.runtime.defaults)")
     args = parser.parse_args()
+    if args.models is None:
+        args.models = [str(default_model_path(role))
+                       for role in ("harmonic", "gaussian_process")]
     points = design_points(HERE / "designs.csv")
 
     fe = []

@@ -2,7 +2,8 @@
 crosstalk. A TOML file validated by the project's field-spec engine, like scenes and spaces.
 
     [model]
-    path = "models/nn-default"      # a registered harmonic surrogate (predictor run time only)
+    path = "models/nn-default"      # a registered harmonic surrogate (predictor run time only;
+                                    # left out: the default one, surrogate.runtime.defaults)
 
     [array]
     rows = 4                        # sites per column
@@ -78,6 +79,8 @@ from fieldspec.toml import read_toml_file
 from motorlaw import DEFAULTS as MOTOR_LAW
 from motorlaw import DRIVES, SpeedLaw
 from planner.threshold import VERRILLO_1966_FOREARM, ThresholdCurve
+from surrogate.runtime.card import ModelFileError
+from surrogate.runtime.defaults import default_model
 
 __all__ = ["CriterionSpec", "LayoutError", "LayoutRequest", "TimingSpec", "layout_from_dict",
            "load_layout", "short_repr"]
@@ -162,7 +165,8 @@ class LayoutRequest:
     region_mm: tuple[float, float] | None = None  # (width, height) [mm], max_sites only
 
 
-_MODEL = {"path": Spec(str, "models/nn-default"),
+# path: None -> the default harmonic model (surrogate.runtime.defaults, resolved when read)
+_MODEL = {"path": Spec(str, None),
           "allow_extrapolation": Spec(bool, False)}
 
 
@@ -331,6 +335,14 @@ def _sites(array: dict[str, Any]) -> tuple[int, int, tuple | None]:
     return array["rows"], array["cols"], None
 
 
+def _default_model() -> str:
+    """The default harmonic model's directory (``[model] path`` not given)."""
+    try:
+        return default_model("harmonic")
+    except ModelFileError as err:
+        raise LayoutError("model.path", f"model.path is not given and {err}") from None
+
+
 def layout_from_dict(d: Any) -> LayoutRequest:
     """Validate a TOML-shaped mapping; raises :class:`LayoutError` naming the field."""
     ctx = Context(LayoutError)
@@ -364,7 +376,7 @@ def layout_from_dict(d: Any) -> LayoutRequest:
         raise LayoutError("drive.frequencies_hz", f"drive.frequencies_hz: {n} values; give at "
                           f"most {MAX_FREQUENCIES}")
     rows, cols, positions = _sites(array)
-    return LayoutRequest(model["path"], rows, cols, array["grid"],
+    return LayoutRequest(model["path"] or _default_model(), rows, cols, array["grid"],
                          array["min_pitch_mm"], array["max_pitch_mm"], site,
                          tuple(drive["frequencies_hz"]),
                          _criterion(criterion, tuple(drive["frequencies_hz"])),

@@ -49,3 +49,20 @@ def _run_from_repo_root() -> Iterator[None]:
 def examples_dir() -> Path:
     """The directory of the commented example scenes."""
     return REPO / "examples"
+
+
+@pytest.fixture(scope="session")
+def sweep_dataset(tmp_path_factory) -> Path:
+    """48 synthetic designs of the default sweep space, coarsened (tests/sweep_fixture.py)."""
+    from sweep_fixture import make_dataset
+
+    return make_dataset(tmp_path_factory.mktemp("sweep-data") / "default-sweep-coarse", 48)
+
+
+@pytest.fixture(scope="session")
+def sweep_model(sweep_dataset, tmp_path_factory) -> Path:
+    """A small sweep NN on :func:`sweep_dataset` with the normal component, its profile to
+    40 mm (a model directory named ``nn-sweep-fixture``)."""
+    from sweep_fixture import train_model
+
+    return train_model(sweep_dataset, tmp_path_factory.mktemp("sweep-models") / "nn-sweep-fixture")

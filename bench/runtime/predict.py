@@ -53,6 +53,7 @@ from onnx import numpy_helper  # noqa: E402
 
 from surrogate.runtime import find_model, load_model  # noqa: E402
 from surrogate.runtime.card import read_model_file  # noqa: E402
+from surrogate.runtime.defaults import default_model  # noqa: E402
 from surrogate.runtime.encoding import InputSpec  # noqa: E402
 
 ONE = {"orientation": ["forward"], "attachment": ["glued"], "n_rings": [2],
@@ -258,12 +259,16 @@ def chunk_rows(name: str, sizes: list[int], rounds: int, batch: int) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--models", nargs="+", default=["nn-default", "gp-default"])
+    ap.add_argument("--models", nargs="+", default=None,
+                    help="model names or directories (default: the shipped network and GP, "
+                    "surrogate.runtime.defaults: nn-sweep / gp-sweep when installed)")
     ap.add_argument("--rounds", type=int, default=15)
     ap.add_argument("--batch", type=int, default=10_000)
     ap.add_argument("--chunk-rows", help="instead: time predict at --batch with these "
                     "CHUNK_ROWS values, e.g. 256,512,1024")
     args = ap.parse_args()
+    if args.models is None:
+        args.models = [default_model("harmonic"), default_model("gaussian_process")]
     for name in args.models:
         if args.chunk_rows:
             chunk_rows(name, [int(v) for v in args.chunk_rows.split(",")], args.rounds,

@@ -4,12 +4,14 @@
         --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor --out out/cal.json \\
         --plot out/cal.png [--verify]
     hapticrom calibrate examples/measurement-forearm-ldv.csv \\
-        --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor     # picks models/nn-normal
+        --fit skin_E_kPa,fat_thickness_mm,tissue_loss_factor     # picks the normal model
 
-Without ``--model`` the model is chosen by what the measurement sees: ``nn-normal`` (which
-predicts the normal component |u_z| an LDV measures, besides the magnitude) when any row's
-component is ``normal``, else ``nn-default``. A model that lacks an output a row needs is
-refused naming the row, the component and the model (exit 2).
+Without ``--model`` the model is chosen by what the measurement sees
+(:mod:`surrogate.runtime.defaults`): the default ``normal`` model (one that predicts the
+normal component |u_z| an LDV measures, besides the magnitude: ``nn-sweep`` when installed and
+trained with ``profile_normal_um``, else ``nn-normal``) when any row's component is
+``normal``, else the default ``harmonic`` model (``nn-sweep``, else ``nn-default``). A model
+that lacks an output a row needs is refused naming the row, the component and the model (exit 2).
 
 Bayesian: priors from the model's ranges (``--prior NAME=KIND:A,B`` to give one), a likelihood
 from the stated uncertainty and the surrogate's own predictive spread, emcee's ensemble sampler
@@ -35,9 +37,6 @@ from hapticrom.outputs import atomic_path, check_output_file
 
 __all__ = ["register"]
 
-#: the model chosen without --model: for a measurement with normal-component rows, and else
-MODEL_FOR_NORMAL = "nn-normal"
-MODEL_DEFAULT = "nn-default"
 
 
 def _sets(items: list[str]) -> dict[str, Any]:
@@ -69,16 +68,16 @@ def _model(args: argparse.Namespace, measurement: Any) -> str:
     """``--model``, or the model the measurement needs (printed with the reason)."""
     # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from calibration.forward import needs_normal
+    from surrogate.runtime.defaults import default_model
     from surrogate.runtime.models import find_model
 
     if args.model is not None:
         return str(find_model(args.model))  # a directory, or a name of hapticrom models list
     normal = needs_normal(measurement)
-    name = MODEL_FOR_NORMAL if normal else MODEL_DEFAULT
-    found = find_model(name).resolve()
-    path = str(found.relative_to(Path.cwd()) if found.is_relative_to(Path.cwd()) else found)
-    print(f"model {name} ({path}): " + ("the measurement has normal-component rows"
-                                         if normal else "the measurement sees magnitudes"))
+    path = default_model("normal" if normal else "harmonic")
+    print(f"model {Path(path).name} ({path}): " + ("the measurement has normal-component rows"
+                                                   if normal else
+                                                   "the measurement sees magnitudes"))
     return path
 
 
@@ -185,8 +184,7 @@ def _verify(cal: Any, model: str) -> dict[str, Any]:
     mean, _ = cal.forward.predict(np.array([[inputs[n] for n in cal.names]]))
     t0, fe = time.perf_counter(), {}
     for f in cal.measurement.frequencies_hz:
-        res = simulate(scene_from_dict(space.resolve({**space.center(), **inputs,
-                                                      "frequency_hz": f})))
+        res = simulate(scene_from_dict(space.resolve_at({**space.center(), **inputs}, f)))
         fe[f] = res
     points = []
     for k, p in enumerate(cal.measurement.points):
@@ -230,9 +228,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("calibrate", help="fit tissue inputs of a surrogate to a "
                               "measured vibration (Bayesian, with uncertainty)")
     p.add_argument("measurement", help="measurement CSV (docs/calibration.md)")
-    p.add_argument("--model", default=None, help="model directory or name (default: "
-                   f"{MODEL_FOR_NORMAL} when the measurement has normal-component rows, else "
-                   f"{MODEL_DEFAULT})")
+    p.add_argument("--model", default=None, help="model directory or name (default: the "
+                   "default normal-component model when the measurement has normal-component "
+                   "rows, else the default harmonic model: nn-sweep when installed, else "
+                   "nn-normal / nn-default; surrogate.runtime.defaults)")
     p.add_argument("--fit", required=True, metavar="NAMES",
                    help="comma-separated model inputs to fit, e.g. "
                    "skin_E_kPa,fat_thickness_mm,tissue_loss_factor")

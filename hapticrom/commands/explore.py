@@ -105,7 +105,11 @@ def make_server(directory: Path, host: str = "127.0.0.1", port: int = 8024) -> T
 
 
 def _run(args: argparse.Namespace) -> int:
-    out = build_explorer(args.model, Path(args.out) if args.out else None, force=args.rebuild)
+    # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
+    from surrogate.runtime.defaults import default_model
+
+    model = default_model("harmonic") if args.model is None else args.model
+    out = build_explorer(model, Path(args.out) if args.out else None, force=args.rebuild)
     if args.build_only:
         print(f"explorer built in {out}")
         return 0
@@ -135,8 +139,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``explore`` subcommand."""
     p = subparsers.add_parser("explore", help="the design explorer in the browser (served "
                               "locally; the page runs the model itself)")
-    p.add_argument("model", nargs="?", default="nn-default",
-                   help="model directory or name (default: nn-default)")
+    p.add_argument("model", nargs="?", default=None,
+                   help="model directory or name (default: the default harmonic model, "
+                   "nn-sweep when installed, else nn-default)")
     p.add_argument("--port", type=_port, default=8024, help="port (default 8024; 0: any free)")
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
     p.add_argument("--out", metavar="DIR", help="build directory (default embed/explorer/dist)")

@@ -3,8 +3,9 @@ the FE solver, re-ranked on the FE fields with the plan's own criterion (:mod:`p
 and the verdict.
 
 Each candidate's scene is built exactly as the model's training data was: the dataset's own
-parameter space maps model inputs to a scene (``Space.resolve``; inputs the model does not
-take keep the space's centre values, as the fixed ones do), and
+parameter space maps model inputs to a scene (``Space.resolve_at``: a sweep-trained model's
+band becomes one harmonic solve at the candidate's frequency; inputs the model does not take
+keep the space's centre values, as the fixed ones do), and
 ``surrogate.data.worker.run_sample`` solves it with the dataset's mesh settings.
 """
 
@@ -66,7 +67,7 @@ def fe_solver(plan: Any) -> Any:
 
     def solve(r: Any) -> FeSolve:
         row = {**space.center(), **req.site, **r.inputs, "frequency_hz": r.frequency_hz}
-        out = run_sample(space.resolve(row))
+        out = run_sample(space.resolve_at(row, r.frequency_hz))
         if out["status"] != "ok":
             raise RuntimeError(f"--verify: the FE solve of {r.name} at {r.frequency_hz:g} Hz "
                                f"failed: {out['error']}")

@@ -1,7 +1,7 @@
 """``hapticrom predict``: evaluate a registered model (the run-time predictor).
 
-    hapticrom predict models/default-nn --set orientation=forward --set n_rings=2 ...
-    hapticrom predict models/default-nn --csv designs.csv --json out.json [--extrapolate]
+    hapticrom predict models/nn-default --set orientation=forward --set n_rings=2 ...
+    hapticrom predict --csv designs.csv --json out.json [--extrapolate]   # the default model
 
 A CSV has a header naming every input; ``--set`` gives one design point. Only numpy and
 onnxruntime are loaded.
@@ -50,9 +50,13 @@ def _value(text: str) -> Any:
 def _run(args: argparse.Namespace) -> int:
     # lazy: a command's own library loads when it runs (`hapticrom --help`: 0.4 s)
     from surrogate.runtime import load_predictor
+    from surrogate.runtime.defaults import default_model
 
     if args.json:
         check_output_file("--json", args.json, args.overwrite)
+    if args.model is None:
+        args.model = default_model("harmonic")
+        print(f"model {args.model} (the default harmonic model)")
     p = load_predictor(args.model)
     points = _points(args, p.input_names)
     out = p.predict(points, extrapolate=args.extrapolate)
@@ -74,7 +78,9 @@ def _run(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``predict`` subcommand."""
     p = subparsers.add_parser("predict", help="predict amplitudes with a registered model")
-    p.add_argument("model", help="model directory (models/NAME)")
+    p.add_argument("model", nargs="?", default=None,
+                   help="model directory (models/NAME; default: the default harmonic model, "
+                   "nn-sweep when installed, else nn-default)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="one input value (repeat for every input)")
     p.add_argument("--csv", metavar="FILE", help="design points, one per row, header = inputs")

@@ -46,14 +46,24 @@ def _run(args: argparse.Namespace) -> int:
     options = _options(args.options)
     kind = kinds.get(args.kind)
     check_dir_output("--out", args.out, kind="model", overwrite=args.overwrite,
-                     reads=args.data)
-    fit = train_sweep if check_not_mixed(args.data) else train  # sweeps: the complex band
+                     reads=[*args.data, *(args.test_data or [])])
+    sweep = check_not_mixed(args.data)
+    if args.test_data and not sweep:
+        raise FieldError("--test-data", "--test-data: only with sweep datasets (a sweep "
+                         "model's card is scored on the test set's designs)")
+    fit = train_sweep if sweep else train  # sweeps: the complex band
+    more = {"test_data": args.test_data} if args.test_data else {}
     card = fit(args.data, kind.name, args.out, test_fraction=args.test_fraction,
-                 seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
-                 options=options, outputs=args.outputs.split(","),
-                 calibration_fraction=args.calibration_fraction)
+               seed=args.seed, n_modes=args.modes, overwrite=args.overwrite,
+               options=options, outputs=args.outputs.split(","),
+               calibration_fraction=args.calibration_fraction, **more)
     for line in kind.report(card):
         print(line)
+    if "test_set" in card:  # --test-data: the fresh designs' figures beside the held-out ones
+        t = card["test_set"]
+        print(f"test set: {t['designs']} designs ({t['pairs']} pairs)")
+        for name, m in t["metrics"].items():
+            print(f"  {name:22s} " + "  ".join(f"{k} {v:.4g}" for k, v in m.items()))
     print(f"wrote {args.out}")
     for w in card_warnings(card):  # as the card says (written when it was sealed)
         print(f"warning: {w}")
@@ -69,6 +79,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="model kind, a name of the registry surrogate.kinds: gp, nn, mlp, "
                    "lgbm (harmonic amplitudes), rom (transient envelope); docs/architecture.md")
     p.add_argument("--out", required=True, metavar="DIR", help="model directory to write")
+    p.add_argument("--test-data", nargs="+", default=None, metavar="DATASET",
+                   help="sweep datasets of fresh designs (the same space at another seed, "
+                   "e.g. of datasets/spaces/default-sweep-test.toml) the card is also scored "
+                   "on: its test_set (docs/sweep-models.md)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing model directory (only one hapticrom wrote; never "
                    "a dataset or a directory of other files)")

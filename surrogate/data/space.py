@@ -188,6 +188,18 @@ class Space:
             self.band.apply(scene)
         return scene
 
+    def resolve_at(self, row: Mapping[str, Any], frequency_hz: float) -> dict[str, Any]:
+        """Scene dict of one design at one frequency [Hz], what a model trained on this space
+        predicts for ``row`` at ``frequency_hz``: a space with a ``frequency_hz`` parameter
+        takes it as that value; a sweep space's band becomes one harmonic solve at it (its
+        sweep tolerance left out: a direct solve has none)."""
+        scene = self.resolve({**row, "frequency_hz": float(frequency_hz)})
+        if self.band is not None:
+            analysis = scene["analysis"]
+            analysis.pop("tolerance", None)
+            analysis.update(kind="harmonic", frequency_hz=float(frequency_hz))
+        return scene
+
     def scene(self, row: Mapping[str, Any]) -> Any:
         """Validated ``fem.scene.Scene`` for one point. A scene schema error is re-raised as
         :class:`SpaceError` naming the parameter whose path it concerns."""

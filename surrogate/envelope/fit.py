@@ -7,9 +7,10 @@ the harmonic model). Nothing here imports the solver: it fits from stored rows o
 
 What is fitted (everything else is known): per point (center, edge) the mode (log sigma, f_n)
 and, with ``learn_gain``, a log gain g and its frequency slope on top of the harmonic model
-(by default ``models/nn-wide``, over the motor's whole speed range; no gain: chosen by
-measurement, docs/transient-model.md), each affine in the harmonic model's encoded design
-features (one map per attachment by default, ``group_by_attachment``):
+(by default the ``envelope_harmonic`` model of :mod:`surrogate.runtime.defaults`:
+``models/nn-sweep`` when installed, else ``models/nn-wide``, over the motor's whole speed
+range; no gain: chosen by measurement, docs/transient-model.md), each affine in the harmonic
+model's encoded design features (one map per attachment by default, ``group_by_attachment``):
 
 1. FE envelopes: each displacement component is demodulated with the rotor angle phi (exact,
    :mod:`motorlaw`): z_c = analytic(u_c) e^{-i phi}; the point's envelope is
@@ -53,6 +54,7 @@ from surrogate.envelope.metrics import evaluate
 from surrogate.envelope.runs import Run, complex_envelopes, load_runs, run_from_row, schedule_volts
 from surrogate.registry import check_model_out, write_model
 from surrogate.runtime.card import read_card
+from surrogate.runtime.defaults import default_model_path
 from surrogate.runtime.encoding import n_features
 from surrogate.runtime.predictor import load_predictor
 from surrogate.runtime.rom import (
@@ -262,8 +264,8 @@ def _feature_columns(harmonic: Any) -> list[int]:
     return cols
 
 
-def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
-          "models/nn-wide", seed: int = 0, overwrite: bool = False,
+def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path | None =
+          None, seed: int = 0, overwrite: bool = False,
           max_nfev: int = 40, equivalent_loss: bool = False,
           group_by_attachment: bool = True, learn_gain: bool = False,
           modes: int = 1, quasi_static_share: bool = False) -> dict[str, Any]:
@@ -293,6 +295,8 @@ def train(data: Sequence[str | Path], out: str | Path, *, harmonic: str | Path =
                          "modes 1: it adds the quasi-static share) or false")
     modes = 2 if quasi_static_share else modes
     params = params_for(modes)
+    if harmonic is None:  # nn-sweep when installed, else nn-wide
+        harmonic = default_model_path("envelope_harmonic")
     hcard = read_card(harmonic)
     if hcard.get("kind") != "nn" or "frequency_hz" not in [i["name"] for i in hcard["inputs"]]:
         raise ValueError(f"harmonic: {harmonic} is not a harmonic NN model with frequency_hz")

@@ -33,6 +33,7 @@ from surrogate.kinds import SWEEP_KINDS
 from surrogate.kinds import get as get_kind
 from surrogate.registry import check_model_out, package_versions, write_model
 from surrogate.runtime.predictor import CALIBRATION_KEY, Predictor, make_session
+from surrogate.sweep.scoring import load_test_data, score_test_set
 from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import _calibration_rows, card_head, check_outputs, evaluate, split
 
@@ -72,11 +73,14 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                 test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
                 overwrite: bool = False, categorical: str = "onehot",
                 options: dict[str, Any] | None = None, outputs: Sequence[str] = ("profile_um",),
-                calibration_fraction: float | None = None) -> dict[str, Any]:
+                calibration_fraction: float | None = None,
+                test_data: Sequence[str | Path] = ()) -> dict[str, Any]:
     """Train an NN or GP sweep model on the sweep datasets ``paths`` and write ``out``
     (arguments as :func:`surrogate.train.train`; the split and the calibration rows are
-    designs); return its card. ``hapticrom train`` calls it when every dataset is a sweep
-    dataset. The GP: :mod:`surrogate.sweep.gp` (``options``: its ``GP_OPTIONS``)."""
+    designs); return its card. ``test_data``: sweep datasets of fresh designs the card is also
+    scored on (its ``test_set``, :mod:`surrogate.sweep.scoring`). ``hapticrom train`` calls
+    it when every dataset is a sweep dataset. The GP: :mod:`surrogate.sweep.gp` (``options``:
+    its ``GP_OPTIONS``)."""
     spec = get_kind(kind)
     if spec.sweep is None:
         raise FieldError("--kind", f"--kind {kind}: sweep datasets train the "
@@ -87,6 +91,7 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     checked = spec.sweep.check_options(options)
     check_model_out(out, overwrite)
     data = load_sweep_datasets(paths, categorical=categorical)
+    test = load_test_data(test_data, data, categorical) if test_data else None
     normal = "profile_normal_um" in extra
     tr, te = split(len(data.codes), test_fraction, seed)
     tr, cal = _calibration_rows(tr, calibration_fraction, seed)
@@ -122,5 +127,8 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
         card["training"]["calibration_rows"] = int(cal.size)
         predictor = Predictor({**card, "files": {}}, predictor.session)
     card["metrics"] = sweep_metrics(predictor, data, te, extra)
+    if test is not None:
+        card["test_set"] = score_test_set(
+            test, lambda d, designs: sweep_metrics(predictor, d, designs, extra))
     write_model(out, card, {"model.onnx": onnx_bytes}, overwrite=overwrite)
     return card

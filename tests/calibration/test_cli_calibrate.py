@@ -11,6 +11,7 @@ import pytest
 
 from hapticrom.cli import main
 from hapticrom.documents import schema
+from surrogate.runtime.defaults import default_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "hapticrom"))
 from schema_check import problems
@@ -23,7 +24,8 @@ QUICK = ["--walkers", "16", "--steps", "300"]
 @pytest.fixture(scope="module")
 def calibrated(tmp_path_factory):
     out = tmp_path_factory.mktemp("cal")
-    code = main(["calibrate", EXAMPLE, "--model", "models/nn-default", "--fit", FIT, *QUICK,
+    # the model the example layout plans on (the default), as --tissue requires
+    code = main(["calibrate", EXAMPLE, "--model", default_model("harmonic"), "--fit", FIT, *QUICK,
                  "--out", str(out / "cal.json"), "--plot", str(out / "cal.png"), "--verify"])
     assert code == 0
     return out

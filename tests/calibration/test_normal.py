@@ -23,6 +23,8 @@ from calibration.synthetic import REFERENCE_DESIGNS
 from hapticrom.cli import main
 from hapticrom.documents import schema
 from surrogate.runtime import load_predictor
+from surrogate.runtime.card import read_card
+from surrogate.runtime.defaults import default_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "hapticrom"))
 from schema_check import problems
@@ -104,14 +106,16 @@ def test_rows_without_a_normal_output_are_refused_by_name(normal):
     assert "1 row(s)" in str(err.value)
 
 
-def test_calibrate_picks_nn_normal_for_an_ldv_measurement(tmp_path, capsys):
+def test_calibrate_picks_the_default_normal_model_for_an_ldv_measurement(tmp_path, capsys):
+    """nn-normal, or nn-sweep once trained with the normal component (the defaults)."""
+    name = read_card(default_model("normal"))["name"]
     out = tmp_path / "cal.json"
     assert main(["calibrate", LDV, "--fit", FIT3, *QUICK, "--out", str(out),
                  "--plot", str(tmp_path / "cal.png"), "--verify"]) == 0
-    assert "model nn-normal" in capsys.readouterr().out
+    assert f"model {name}" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     assert problems(doc, schema("calibration")) == []
-    assert doc["model"]["name"] == "nn-normal"
+    assert doc["model"]["name"] == name
     assert doc["likelihood"]["error_length_mm"] == {
         "profile_normal_um": SURROGATE_ERROR_T["profile_normal_um"]["length_mm"]}
     err = doc["likelihood"]["surrogate_error"]["profile_normal_um"]

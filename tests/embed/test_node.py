@@ -37,9 +37,20 @@ def max_rel(a, b) -> float:
 @pytest.mark.parametrize(("model", "n"), [("nn-default", 1000), ("gp-default", 200),
                                           ("nn-normal", 300)])
 def test_node_equals_python_on_random_designs(node, sealed, tmp_path, model, n):
-    predictor = load_predictor(sealed[model])
+    _node_equals_python(node, sealed[model], n, tmp_path)
+
+
+def test_node_equals_python_on_a_sweep_model(node, sweep_model, tmp_path):
+    """A sweep-trained graph (the band decode: gathers at two grid frequencies, the factored
+    basis) and its 40 mm profile, read by the same JavaScript."""
+    _node_equals_python(node, sweep_model, 300, tmp_path)
+
+
+def _node_equals_python(node: str, path: Path, n: int, tmp_path: Path) -> None:
+    model = path.name
+    predictor = load_predictor(path)
     rows = random_designs(predictor.card, n, seed=24)
-    run = run_node(node, sealed[model], rows, tmp_path)
+    run = run_node(node, path, rows, tmp_path)
     assert run.returncode == 0, run.stderr
     got = json.loads(run.stdout)["outputs"]
     want = predictor.predict(columns(rows))

@@ -10,6 +10,7 @@ import os
 import pytest
 
 from hapticrom.cli import main
+from surrogate.runtime.defaults import default_model_path
 from tests.planner.thigh import ROOT, THIGH, toml_text
 
 PATTERN = """[pattern]
@@ -51,7 +52,7 @@ def test_a_small_thigh_plan_plays_from_another_directory(tmp_path, monkeypatch):
     plan_path = tmp_path / "plans" / "plan.json"
     assert main(["plan", str(layout), "--out", str(plan_path)]) == 0
     doc = json.loads(plan_path.read_text())
-    assert doc["model"] == os.path.relpath(ROOT / "models" / "nn-default", tmp_path / "plans")
+    assert doc["model"] == os.path.relpath(default_model_path("harmonic"), tmp_path / "plans")
     assert doc["timing"]["model"] == os.path.relpath(ROOT / "models" / "rom-default",
                                                      tmp_path / "plans")
     elsewhere = tmp_path / "elsewhere"

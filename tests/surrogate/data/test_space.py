@@ -321,3 +321,29 @@ def test_shipped_spaces_load_and_resolve(name: str) -> None:
     hashes = {scene_hash(space.scene({k: c[i] for k, c in v.items()}))
               for i in np.flatnonzero(mask)}
     assert len(hashes) == mask.sum()
+
+
+def test_resolve_at_makes_a_sweep_space_one_harmonic_solve_at_the_frequency():
+    """What plan --verify and calibrate --verify solve for a sweep-trained model: the design's
+    scene with its band replaced by one frequency (the sweep's tolerance dropped)."""
+    from sweep_fixture import coarse_space_dict
+
+    d = coarse_space_dict()
+    d["band"]["tolerance"] = 0.01
+    space = space_from_dict(d, check_scenes=False)
+    row = space.center()
+    sweep = space.resolve(row)
+    assert sweep["analysis"] == {"kind": "sweep", "tolerance": 0.01,
+                                 "frequency_hz": {"start": 100.0, "stop": 250.0, "step": 10.0}}
+    one = space.resolve_at(row, 135.0)
+    assert one["analysis"] == {"kind": "harmonic", "frequency_hz": 135.0}
+    assert {k: v for k, v in one.items() if k != "analysis"} == {
+        k: v for k, v in sweep.items() if k != "analysis"}  # the same design, 40 mm profile
+    assert one["output"]["profile_length_mm"] == 40.0
+
+
+def test_resolve_at_on_a_single_frequency_space_sets_its_frequency_parameter():
+    space = load_space("datasets/spaces/default.toml", check_scenes=False)
+    row = space.center()
+    assert space.resolve_at(row, 135.0) == space.resolve({**row, "frequency_hz": 135.0})
+    assert space.resolve_at(row, 135.0)["analysis"]["frequency_hz"] == 135.0
