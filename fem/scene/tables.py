@@ -59,7 +59,7 @@ LAYER = _from_model(Layer, {
     "name": Spec(str, None),  # default: the material name, else "layer<i>"
     "material": Spec(str, None),  # library name; explicit fields below override it
     "thickness_mm": Spec(float, REQUIRED, "[0.001, 10000]"),  # 1 um: below, cells are slivers
-    "E_kPa": Spec(float, REQUIRED, "(0, 1e9]", missing_hint=FROM_MATERIAL),
+    "E_kPa": Spec(float, REQUIRED, "[0.001, 1e9]", missing_hint=FROM_MATERIAL),
     "density_kg_m3": Spec(float, REQUIRED, "(0, 1e5]", missing_hint=FROM_MATERIAL),
     "nu": Spec(float, REQUIRED, "[0, 0.5)", missing_hint=FROM_MATERIAL),
     "loss_factor": Spec(float, MODEL, "[0, 2]"),
@@ -74,7 +74,7 @@ MOTOR = _from_model(Motor, {
     "force_N": Spec(float, None, "(0, 1e3]", input_only=True),  # -> unbalance_g_mm
     "force_at_hz": Spec(float, None, "(0, 1e5]", input_only=True),
     "rotor_height_mm": Spec(float, MODEL, "[0, unit.motor.height_mm]"),
-    "E_kPa": Spec(float, MODEL, "(0, 1e9]"),
+    "E_kPa": Spec(float, MODEL, "[0.001, 1e9]"),
     "nu": Spec(float, MODEL, "[0, 0.5)"),
     "rated_voltage_V": Spec(float, MODEL, "(0, 50]"),
     "rated_frequency_hz": Spec(float, MODEL, "(0, 1e4]"),
@@ -86,7 +86,7 @@ BOARD = _from_model(Board, {
     "thickness_mm": Spec(float, MODEL, "[0, 10]"),  # 0: no board; else >= 1 um (unit checks)
     "diameter_mm": Spec(float, MODEL, "[0.001, 100]"),
     "material": Spec(str, MODEL),  # library name; the three keys below default to its values
-    "E_kPa": Spec(float, REQUIRED, "(0, 1e9]", missing_hint=FROM_MATERIAL),
+    "E_kPa": Spec(float, REQUIRED, "[0.001, 1e9]", missing_hint=FROM_MATERIAL),
     "density_kg_m3": Spec(float, REQUIRED, "(0, 1e5]", missing_hint=FROM_MATERIAL),
     "nu": Spec(float, REQUIRED, "[0, 0.5)", missing_hint=FROM_MATERIAL),
 })

@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import expm
+from scipy.signal import savgol_filter
 
 from surrogate.envelope.card import HOLDOUT_EVERY
 from surrogate.envelope.metrics import POINTS, envelope_metrics, summarise
@@ -102,7 +104,6 @@ def residual_response(t_ms: NDArray, a: NDArray, b: NDArray) -> NDArray:
     ``b`` (nt, n) per ms, each step integrated exactly with a and b held at their step
     averages (the exponential of the augmented matrix [[a, b], [0, 0]] h, exact also for a
     singular a)."""
-    from scipy.linalg import expm
 
     nt, n = b.shape
     h = np.diff(t_ms)
@@ -136,6 +137,7 @@ class Variant:
 
 def _affine_in_r(n_controls: int, degree: int) -> Any:
     """{1, r} x every monomial of the controls up to ``degree`` (constant included)."""
+    # lazy: pysindy is no dependency (bench/surrogate/envelope_sindy.py: how to install)
     import pysindy as ps
 
     return ps.GeneralizedLibrary(
@@ -147,6 +149,7 @@ def _affine_in_r(n_controls: int, degree: int) -> Any:
 def _vanishing(n_states: int = 1) -> Any:
     """{state, d, wd} x {1, w, m} (controls d, wd, w, m): every term is zero in steady running
     (r = dr/dt = d = wd = 0), so the residual keeps today's steady level."""
+    # lazy: pysindy is no dependency (bench/surrogate/envelope_sindy.py: how to install)
     import pysindy as ps
 
     return ps.GeneralizedLibrary(
@@ -158,6 +161,7 @@ def _vanishing(n_states: int = 1) -> Any:
 
 def _stlsq(threshold: float) -> Callable[[], Any]:
     def make() -> Any:
+        # lazy: pysindy is no dependency (bench/surrogate/envelope_sindy.py: how to install)
         import pysindy as ps
 
         return ps.STLSQ(threshold=threshold, alpha=1e-3, normalize_columns=True)
@@ -165,6 +169,7 @@ def _stlsq(threshold: float) -> Callable[[], Any]:
 
 
 def _sr3() -> Any:
+    # lazy: pysindy is no dependency (bench/surrogate/envelope_sindy.py: how to install)
     import pysindy as ps
 
     return ps.SR3(reg_weight_lam=0.05, regularizer="L1", normalize_columns=True, max_iter=200)
@@ -202,7 +207,6 @@ def _window(variant: Variant, dt_ms: float) -> int:
 def _state(tr: Trace, variant: Variant) -> NDArray:
     """The measured state (nt, order): r, and for a second-order residual its rate (per ms,
     by the Savitzky-Golay filter pysindy's ``SmoothedFiniteDifference`` uses)."""
-    from scipy.signal import savgol_filter
 
     r = tr.residual
     if variant.order == 1:
@@ -247,6 +251,7 @@ class Fitted:
 
 def fit(variant: Variant, train: Sequence[Trace]) -> Fitted:
     """Identify the residual per point and attachment on the training traces."""
+    # lazy: pysindy is no dependency (bench/surrogate/envelope_sindy.py: how to install)
     import pysindy as ps
 
     models, columns = {}, {}

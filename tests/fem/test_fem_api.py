@@ -34,7 +34,7 @@ def test_scene_error_is_the_field_error():
         fem.scene_from_dict({"unit": {"encapsulation": [{"E_kPa": -1.0}]},
                              "load": {"kind": "unit"}})
     assert info.value.field == "unit.encapsulation[0].E_kPa"
-    assert "0 < E_kPa <= 1e9" in str(info.value)
+    assert "0.001 <= E_kPa <= 1e9" in str(info.value)
 
 
 def test_load_kind_is_a_string_enum_in_files_and_json():

@@ -114,6 +114,9 @@ def _check(base: str, changes: list[tuple[str, Any]], max_unknowns: float) -> No
 # graded segments, and the rows above the skin, were not counted)
 @example(("unit", [("tissue.layer.0.thickness_mm", 110.0)]))
 @example(("pogo", [("tissue.layer.0.thickness_mm", 72.3)]))
+# found by this test: a skin of 1e-30 kPa passed validation and made the static system singular
+# (FloatingPointError); moduli now start at 0.001 kPa (1 Pa, softer than any tissue or gel)
+@example(("static", [("tissue.layer.0.E_kPa", 1e-30)]))
 def test_mutated_scenes_validate_and_solve_finite_or_raise_a_field_error(case):
     _check(*case, max_unknowns=20_000)
 

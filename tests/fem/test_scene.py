@@ -212,7 +212,7 @@ def _num(lo: float, hi: float, exclude_min: bool = False) -> st.SearchStrategy[f
 layers = st.fixed_dictionaries(
     {
         "thickness_mm": _num(0.001, 1e4),
-        "E_kPa": _num(0, 1e9, exclude_min=True),
+        "E_kPa": _num(0.001, 1e9),
         "density_kg_m3": _num(0, 1e5, exclude_min=True),
         "nu": st.floats(0, 0.5, exclude_max=True),
     },
@@ -343,7 +343,8 @@ RANGES = [
     ("tissue.layer[0].thickness_mm", [0, -1, 1e-4, 10000.5], [0.001, 10000],
      "0.001 <= thickness_mm <= 10000",
      {}),
-    ("tissue.layer[0].E_kPa", [0.0, 1.1e9], [1e-6, 1e9], "0 < E_kPa <= 1e9", {}),
+    ("tissue.layer[0].E_kPa", [0.0, 1e-30, 9e-4, 1.1e9], [1e-3, 1e9], "0.001 <= E_kPa <= 1e9",
+     {}),
     ("tissue.layer[0].density_kg_m3", [0, 100001], [0.1, 1e5], "0 < density_kg_m3 <= 1e5", {}),
     ("tissue.layer[0].nu", [-0.01, 0.5, 0.6, math.nan], [0, 0.49999], "0 <= nu < 0.5", {}),
     ("tissue.layer[0].loss_factor", [-0.1, 2.01], [0, 2], "0 <= loss_factor <= 2", {}),
