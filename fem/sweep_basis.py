@@ -122,35 +122,24 @@ class GrowingBasis:
 
     def _grow(self, needed: int) -> None:
         cap = max(needed, 2 * self.capacity)
-        V = np.zeros((self._V.shape[0], cap), dtype=complex, order="F")
-        V[:, : self.size] = self.basis
-        R = np.zeros((self._reduced.shape[0], cap, cap), dtype=complex)
-        R[:, : self.size, : self.size] = self.reduced
-        load = np.zeros(cap, dtype=complex)
-        load[: self.size] = self.load
-        self._V, self._reduced, self._load = V, R, load
+        self._V = _padded(self._V, cap, (1,), order="F")
+        self._reduced = _padded(self._reduced, cap, (1, 2))
+        self._load = _padded(self._load, cap, (0,))
         if self._outputs is not None:
-            out = np.zeros((*self._outputs.shape[:2], cap), dtype=complex)
-            out[..., : self.size] = self.outputs
-            self._outputs = out
-        self._local = [np.concatenate([loc[: self.size],
-                                       np.zeros((cap - self.size, loc.shape[1]),
-                                                dtype=complex)])
-                       for loc in self._local]
+            self._outputs = _padded(self._outputs, cap, (2,))
+        self._local = [_padded(loc, cap, (0,)) for loc in self._local]
 
     def solve(self, coefficients: NDArray, size: int | None = None) -> NDArray:
         """Reduced coordinates (n_f, s) at the frequencies whose term coefficients are the
         rows of ``coefficients`` (n_f, n_terms), on the first ``size`` columns (all: None)."""
         s = self.size if size is None else size
-        A = np.tensordot(coefficients, self._reduced[:, :s, :s], axes=1)  # (n_f, s, s)
-        b = np.broadcast_to(self._load[:s], (A.shape[0], s))[..., None]
-        return np.linalg.solve(A, b)[..., 0]
+        return galerkin_solve(self._reduced[:, :s, :s], self._load[:s], coefficients)
 
     def evaluate(self, coefficients: NDArray, size: int | None = None) -> NDArray:
         """Outputs (n_f, n_out, 3) of the model on the first ``size`` columns."""
         s = self.size if size is None else size
-        y = self.solve(coefficients, s)
-        return np.einsum("ocr,fr->foc", self.outputs[..., :s], y)
+        return galerkin_outputs(self._reduced[:, :s, :s], self._load[:s],
+                                self.outputs[..., :s], coefficients)
 
     def residual(self, coefficients: NDArray) -> float:
         """||A(omega) V y - b|| / ||b|| of the full operator at one frequency."""
@@ -174,6 +163,30 @@ def orthonormalised(w: NDArray, bases: list[NDArray]) -> NDArray | None:
                 w = w - V @ (w.conj() @ V).conj()
     norm = np.linalg.norm(w)
     return None if norm < DEPENDENT else w / norm
+
+
+def galerkin_solve(reduced: NDArray, load: NDArray, coefficients: NDArray) -> NDArray:
+    """Coordinates (n_f, s) solving sum_k c_k R_k y = l for reduced terms R (n_terms, s, s),
+    load l (s,) and term coefficients c (n_f, n_terms), one frequency a row."""
+    A = np.tensordot(coefficients, reduced, axes=1)  # (n_f, s, s)
+    b = np.broadcast_to(load, (A.shape[0], load.size))[..., None]
+    return np.linalg.solve(A, b)[..., 0]
+
+
+def galerkin_outputs(reduced: NDArray, load: NDArray, outputs: NDArray,
+                     coefficients: NDArray) -> NDArray:
+    """Outputs (n_f, n_out, 3) of a reduced model: :func:`galerkin_solve` mapped through the
+    output values (n_out, 3, s) of its columns."""
+    return np.einsum("ocr,fr->foc", outputs, galerkin_solve(reduced, load, coefficients))
+
+
+def _padded(a: NDArray, capacity: int, axes: tuple[int, ...], order: str = "C") -> NDArray:
+    """``a`` copied into zeros whose ``axes`` have length ``capacity`` (the held columns
+    first)."""
+    shape = [capacity if k in axes else n for k, n in enumerate(a.shape)]
+    out = np.zeros(shape, dtype=a.dtype, order=order)
+    out[tuple(slice(0, n) for n in a.shape)] = a
+    return out
 
 
 def _real_product(Z: NDArray, X: NDArray) -> NDArray:

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .scene.model import Analysis
-from .sweep_basis import GrowingBasis, orthonormalised
+from .sweep_basis import GrowingBasis, galerkin_outputs, orthonormalised
 from .sweep_operator import SweepOperator
 
 #: Default tolerance of the estimated relative error of centre, edge and profile (the scene's).
@@ -142,10 +142,7 @@ def _without_deepest(model: GrowingBasis, coef: NDArray,
     keep = [np.pad(c, (0, r - c.size)) for b in blocks for c in (b[:-1] if len(b) > 1 else b)]
     Q, _ = np.linalg.qr(np.column_stack(keep))
     sub = np.einsum("ai,kab,bj->kij", Q.conj(), model.reduced, Q)
-    A = np.tensordot(coef, sub, axes=1)
-    b = np.broadcast_to(Q.conj().T @ model.load, (A.shape[0], Q.shape[1]))[..., None]
-    y = np.linalg.solve(A, b)[..., 0]
-    return np.einsum("ocr,fr->foc", model.outputs @ Q, y)
+    return galerkin_outputs(sub, Q.conj().T @ model.load, model.outputs @ Q, coef)
 
 
 def _expand(op: SweepOperator, omega_e: float, model: GrowingBasis, depth: int,
