@@ -1,8 +1,8 @@
-"""Decisions against the FE's: `hapticrom plan --verify` on five layouts, one table.
+"""Decisions against the FE's: `hapticrom plan --verify` on six layouts, one table.
 
     .venv/bin/python bench/planner/plan_verify.py [--top 5] [--model models/nn-default]
 
-The layouts: examples/forearm-layout.toml and
+The layouts: examples/forearm-layout.toml, examples/thigh-layout.toml and
 bench/planner/layouts/{square,hex,free,thick-fat}.toml.
 For each, the plan (``planner.plan_layout``) and its FE re-plan of the surrogate's top K
 candidates (``hapticrom.commands.plan_verify.verify_plan``: each candidate's scene built from
@@ -11,8 +11,10 @@ criterion), as library calls from the repository root. Columns: the surrogate's 
 FE's (design at frequency), whether they agree, the winner's compared value (grids: the
 nominal pitch [mm]; free positions: the worst load at the sites) by the surrogate and by the
 FE and their difference (surrogate / FE - 1), whether the criterion holds at the FE field at
-the planned pitch, the verdict (confirmed: same winner, within 2 %, criterion holds) and the
-time of plan + FE re-plan [s]. Prints a Markdown table.
+the planned pitch, the verdict (confirmed: same winner, within 2 %, criterion holds), the share
+of the winner's leakage read beyond the model's profile (the log-slope extension; the plan's
+``validity.profile.leakage_share_beyond_profile``) and the time of plan + FE re-plan [s].
+Prints a Markdown table.
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ from hapticrom.commands.plan_verify import verify_plan  # noqa: E402
 from planner import load_layout, plan_layout  # noqa: E402
 from planner.verify import DEFAULT_TOP  # noqa: E402
 
-LAYOUTS = ("examples/forearm-layout.toml", "bench/planner/layouts/square.toml",
+LAYOUTS = ("examples/forearm-layout.toml", "examples/thigh-layout.toml",
+           "bench/planner/layouts/square.toml",
            "bench/planner/layouts/hex.toml", "bench/planner/layouts/free.toml",
            "bench/planner/layouts/thick-fat.toml")
 
@@ -51,8 +54,8 @@ def main() -> None:
           + (f", model {args.model}" if args.model else ""))
     print()
     print("| layout | surrogate winner | FE winner | agree? | compared | surrogate / FE / "
-          "difference | criterion at FE | verdict | time s |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "difference | criterion at FE | verdict | leakage beyond profile | time s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for path in LAYOUTS:
         t0 = time.perf_counter()
         req = load_layout(path)
@@ -60,7 +63,7 @@ def main() -> None:
             req = replace(req, model=args.model)
         plan = plan_layout(req)
         if plan.best is None:
-            print(f"| {path} | none feasible | | | | | | | {time.perf_counter() - t0:.1f} |")
+            print(f"| {path} | none feasible | | | | | | | | {time.perf_counter() - t0:.1f} |")
             continue
         v = verify_plan(plan, args.top)
         dt = time.perf_counter() - t0
@@ -75,7 +78,8 @@ def main() -> None:
               f"{'worst load' if free else 'pitch'} (top {v['top_k']}) | "
               f"{_value(c['surrogate']['value'], free)} / {_value(c['fe']['value'], free)} / "
               f"{diff} | {'holds' if v['holds'] else 'FAILS'} (load {load:.3f}) | "
-              f"{'confirmed' if v['confirmed'] else 'refuted'} | {dt:.1f} |")
+              f"{'confirmed' if v['confirmed'] else 'refuted'} | {plan.best.beyond_profile:.0%} | "
+              f"{dt:.1f} |")
 
 
 if __name__ == "__main__":
