@@ -8,18 +8,23 @@ Every command that takes a model and is given none asks :func:`default_model` fo
 * ``normal``: a harmonic model that also predicts the normal component ``profile_normal_um``
   (``hapticrom calibrate`` of a measurement with normal-component rows, e.g. an LDV's);
 * ``envelope_harmonic``: the harmonic model the envelope fit takes its steady part from
-  (``hapticrom train --kind rom``; the envelope model carries a copy of it, so
-  ``models/rom-default`` switches when it is trained again, docs/sweep-models.md);
+  (``hapticrom train --kind rom``; the envelope model carries a copy of it). It must cover the
+  motor's whole speed range, 20-250 Hz from spin-up to full speed, so only ``nn-wide`` serves:
+  the sweep models are trained over the drive band 100-250 Hz and would answer a spin-up at
+  40 Hz with their 100 Hz value (``extrapolate=True`` clamps to the band);
 * ``gaussian_process``: the shipped Gaussian process, the peer with its own intervals that
   the benches and the FE comparison example run beside the network
   (``bench/runtime/predict.py``, ``examples/surrogate_vs_fe.py``).
 
 Each role lists its candidates in order of preference: the sweep-trained models first
-(``nn-sweep``: trained on the complex band of ``datasets/spaces/default-sweep.toml``, its
-profile to 40 mm; docs/sweep-models.md), then the single-frequency models that served before
-them. The first candidate that is installed (:func:`surrogate.runtime.models.find_model`) and
-whose card has what the role needs wins, so the same code runs before the sweep models are
-trained and after ``models/nn-sweep`` is written: installing a model switches every command.
+(``nn-sweep``, ``nn-sweep-normal`` and ``gp-sweep``: trained on the complex band of
+``datasets/spaces/default-sweep.toml``, their profiles to 40 mm; docs/sweep-models.md), then
+the single-frequency models that served before them. ``nn-sweep-normal`` is a network of its
+own because learning the normal component beside the magnitude costs the magnitude outputs
+accuracy (measured in docs/sweep-models.md). The first candidate that is installed
+(:func:`surrogate.runtime.models.find_model`) and whose card has what the role needs wins, so
+the same code runs with or without ``models/nn-sweep``: installing a model switches every
+command.
 """
 
 from __future__ import annotations
@@ -35,8 +40,8 @@ __all__ = ["DEFAULT_MODELS", "ROLE_OUTPUTS", "default_model", "default_model_pat
 #: role -> candidate model names, preferred first (see the module docstring)
 DEFAULT_MODELS: dict[str, tuple[str, ...]] = {
     "harmonic": ("nn-sweep", "nn-default"),
-    "normal": ("nn-sweep", "nn-normal"),
-    "envelope_harmonic": ("nn-sweep", "nn-wide"),
+    "normal": ("nn-sweep-normal", "nn-sweep", "nn-normal"),
+    "envelope_harmonic": ("nn-wide",),
     "gaussian_process": ("gp-sweep", "gp-default"),
 }
 #: role -> the outputs a candidate's card must list to serve it

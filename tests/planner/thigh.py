@@ -21,7 +21,10 @@ def thigh(perceptual: bool = False) -> dict[str, Any]:
 
 
 def toml_text(perceptual: bool = False) -> str:
-    """The example file's text with absolute model paths."""
+    """The example file's text with absolute model paths, planned on ``nn-default`` as
+    :func:`thigh` is (the example leaves the path out, so it would take the default model)."""
     text = (THIGH_PERCEPTUAL if perceptual else THIGH).read_text()
-    return (text.replace('"models/nn-default"', repr(str(ROOT / "models" / "nn-default")))
+    nn = repr(str(ROOT / "models" / "nn-default"))
+    assert '# path = "models/nn-default"' in text
+    return (text.replace('# path = "models/nn-default"', f"path = {nn}", 1)
             .replace('"models/rom-default"', repr(str(ROOT / "models" / "rom-default"))))

@@ -19,11 +19,11 @@ SWEEP = "nn-sweep-fixture"  # the directory name of the sweep_model fixture
 
 @pytest.fixture
 def with_sweep(monkeypatch, sweep_model):
-    """The sweep fixture installed (on the model path) and preferred by every role, as
-    ``models/nn-sweep`` is once trained."""
+    """The sweep fixture installed (on the model path) in place of every sweep candidate
+    (``nn-sweep``, ``nn-sweep-normal``, ``gp-sweep``), as the trained models are."""
     monkeypatch.setenv(MODEL_PATH_ENV, str(sweep_model.parent))
     monkeypatch.setattr(defaults, "DEFAULT_MODELS",
-                        {role: (SWEEP, *names[1:])
+                        {role: tuple(SWEEP if "sweep" in name else name for name in names)
                          for role, names in defaults.DEFAULT_MODELS.items()})
     return sweep_model
 
@@ -34,13 +34,22 @@ def without_sweep(monkeypatch):
     serve, as before the sweep models are trained."""
     monkeypatch.delenv(MODEL_PATH_ENV, raising=False)
     monkeypatch.setattr(defaults, "DEFAULT_MODELS",
-                        {role: ("no-such-sweep-model", *names[1:])
+                        {role: tuple("no-such-sweep-model" if "sweep" in name else name
+                                     for name in names)
                          for role, names in defaults.DEFAULT_MODELS.items()})
 
 
-def test_every_role_takes_the_installed_sweep_model(with_sweep):
-    for role in ("harmonic", "normal", "envelope_harmonic"):
+def test_every_harmonic_role_takes_the_installed_sweep_model(with_sweep):
+    for role in ("harmonic", "normal"):
         assert default_model_path(role).resolve() == with_sweep.resolve()
+
+
+def test_the_envelope_keeps_a_model_of_the_motors_whole_speed_range(with_sweep):
+    # the spin-up passes 20-100 Hz, below the sweep models' 100-250 Hz band
+    card = read_card(default_model_path("envelope_harmonic"))
+    band = next(i for i in card["inputs"] if i["name"] == "frequency_hz")
+    assert not is_sweep_model(card)
+    assert band["low"] <= 20.0 and band["high"] >= 250.0
 
 
 def test_before_the_sweep_models_the_single_frequency_ones_serve(without_sweep):
