@@ -9,14 +9,17 @@ from hapticrom.cli import main
 from planner.design.request import design_request_from_dict
 from planner.design.run import design
 from planner.tissue import load_tissue
+from surrogate.runtime.defaults import default_model_path
 
 
 @pytest.fixture(scope="module")
 def tissue(tmp_path_factory):
+    """The calibration on the default harmonic model, the one the request (no `[model] path`)
+    plans on: `--tissue` refuses a calibration of another model."""
     out = tmp_path_factory.mktemp("cal") / "cal.json"
     assert main(["calibrate", "examples/measurement-forearm.csv", "--model",
-                 "models/nn-default", "--fit", "skin_E_kPa,fat_thickness_mm,tissue_loss_factor",
-                 "--walkers", "16",
+                 str(default_model_path("harmonic")),
+                 "--fit", "skin_E_kPa,fat_thickness_mm,tissue_loss_factor", "--walkers", "16",
                  "--steps", "200", "--out", str(out)]) == 0
     return load_tissue(out)
 
