@@ -17,14 +17,15 @@ def _block(path: str, marker: str) -> str:
     return text.split("```python\n", 1)[1].split("```", 1)[0]
 
 
-@pytest.mark.parametrize("path, marker", [("README.md", "**Predict**"),
-                                          ("docs/surrogates.md", "## Embed the predictor")])
-def test_readme_python_lines_run(path, marker):
+@pytest.mark.parametrize("path, marker, centre", [
+    ("README.md", "**Predict**", "13.797"),  # nn-sweep, the default network
+    ("docs/surrogates.md", "## Embed the predictor", "13.969")])  # nn-default
+def test_readme_python_lines_run(path, marker, centre):
     code = _block(path, marker)
     assert len([line for line in code.splitlines() if line.strip()]) <= 10
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         exec(compile(code, path, "exec"), {})
     first = out.getvalue().splitlines()[0]
-    assert first.startswith("[13.969") and "[4.55]" in first  # docs/embedding.md, section 6
-    assert "13.969" in (REPO / "docs/embedding.md").read_text()
+    assert first.startswith(f"[{centre}") and "[4.55]" in first  # docs/embedding.md, section 6
+    assert f"centre {centre} µm" in (REPO / "docs/embedding.md").read_text()
