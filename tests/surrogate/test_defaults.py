@@ -22,9 +22,7 @@ def with_sweep(monkeypatch, sweep_model):
     """The sweep fixture installed (on the model path) in place of every sweep candidate
     (``nn-sweep``, ``nn-sweep-normal``, ``gp-sweep``), as the trained models are."""
     monkeypatch.setenv(MODEL_PATH_ENV, str(sweep_model.parent))
-    monkeypatch.setattr(defaults, "DEFAULT_MODELS",
-                        {role: tuple(SWEEP if "sweep" in name else name for name in names)
-                         for role, names in defaults.DEFAULT_MODELS.items()})
+    _sweep_candidates_as(monkeypatch, SWEEP)
     return sweep_model
 
 
@@ -33,9 +31,14 @@ def without_sweep(monkeypatch):
     """The sweep candidate absent (a name no model root holds): the single-frequency models
     serve, as before the sweep models are trained."""
     monkeypatch.delenv(MODEL_PATH_ENV, raising=False)
+    _sweep_candidates_as(monkeypatch, "no-such-sweep-model")
+
+
+def _sweep_candidates_as(monkeypatch, name: str) -> None:
+    """Every sweep candidate of every role (``nn-sweep``, ``nn-sweep-normal``, ``gp-sweep``)
+    renamed ``name``, the other candidates kept in their order."""
     monkeypatch.setattr(defaults, "DEFAULT_MODELS",
-                        {role: tuple("no-such-sweep-model" if "sweep" in name else name
-                                     for name in names)
+                        {role: tuple(name if "sweep" in n else n for n in names)
                          for role, names in defaults.DEFAULT_MODELS.items()})
 
 

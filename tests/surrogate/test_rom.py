@@ -24,9 +24,9 @@ from surrogate.runtime.rom import (
     mode_response,
     motor_speed,
 )
-from tests.surrogate.rom_cases import DESIGN, ROOT, SHIPPED
+from tests.surrogate.rom_cases import DESIGN, ROOT, SHIPPED, TRANSIENT, transient_subset
 
-DATASET = ROOT / "datasets" / "transient"
+DATASET = TRANSIENT
 MOTOR = SpeedLaw()
 
 
@@ -272,17 +272,7 @@ def test_identification_recovers_a_known_mode(model):
 
 def test_train_kind_rom_registers_a_verified_model(tmp_path, capsys):
     from hapticrom.cli import main
-    from surrogate.data.integrity import manifest_digest
-
-    data = tmp_path / "data"  # a three-part subset, its manifest listing those parts only
-    data.mkdir()
-    manifest = json.loads((DATASET / "_manifest.json").read_text())
-    keep = sorted(manifest["parts"])[:3]
-    for name in keep:
-        shutil.copy(DATASET / name, data)
-    manifest["parts"] = {k: manifest["parts"][k] for k in keep}
-    manifest["digest"] = manifest_digest(manifest)
-    (data / "_manifest.json").write_text(json.dumps(manifest))
+    data = transient_subset(tmp_path / "data")  # three parts, its manifest listing only them
     out = tmp_path / "rom"
     opts = json.dumps({"max_nfev": 2})
     assert main(["train", "--data", str(data), "--kind", "rom", "--out", str(out),

@@ -5,36 +5,22 @@ unchanged; the default harmonic of the fit is the defaults' ``envelope_harmonic`
 
 from __future__ import annotations
 
-import json
-import shutil
-
 import numpy as np
 import pytest
 
-from surrogate.data.integrity import manifest_digest
 from surrogate.envelope.fit import train
 from surrogate.runtime import defaults
 from surrogate.runtime.models import MODEL_PATH_ENV
 from surrogate.runtime.predictor import load_predictor
 from surrogate.runtime.rom import load_envelope_model
-from tests.surrogate.rom_cases import DESIGN, ROOT
-
-DATASET = ROOT / "datasets" / "transient"
+from tests.surrogate.rom_cases import DESIGN
+from tests.surrogate.rom_cases import transient_subset as write_transient_subset
 
 
 @pytest.fixture(scope="module")
 def transient_subset(tmp_path_factory):
     """The shipped transient dataset's first three parts (its manifest listing only them)."""
-    data = tmp_path_factory.mktemp("transient") / "data"
-    data.mkdir()
-    manifest = json.loads((DATASET / "_manifest.json").read_text())
-    keep = sorted(manifest["parts"])[:3]
-    for name in keep:
-        shutil.copy(DATASET / name, data)
-    manifest["parts"] = {k: manifest["parts"][k] for k in keep}
-    manifest["digest"] = manifest_digest(manifest)
-    (data / "_manifest.json").write_text(json.dumps(manifest))
-    return data
+    return write_transient_subset(tmp_path_factory.mktemp("transient") / "data")
 
 
 def test_the_envelope_fit_takes_its_steady_part_from_the_default_sweep_model(
