@@ -2,7 +2,7 @@
 
     .venv/bin/python bench/planner/plan.py [--repeat 5]
 
-Uses examples/forearm-layout.toml (3 designs x 3 frequencies on the shipped nn-default) with
+Uses examples/forearm-layout.toml (3 designs x 3 frequencies on its default harmonic model) with
 the array size replaced, under the ratio criterion and the perceptual one (detection
 threshold, planner.threshold); prints medians. The command (``python -m hapticrom.cli plan``,
 this checkout's code) includes interpreter start-up, imports and the envelope timing of the
