@@ -7,7 +7,8 @@ better designs").
     # (a) active learning: start 1,024 designs, add 512 by disagreement or by Sobol order
     python bench/surrogate/refine_sweep.py active --data datasets/default-sweep \
         --test-data datasets/default-sweep-test --out-dir out/refine-sweep
-    # (b) multi-fidelity: nn-default's predictions as extra features of the MLP peer
+    # (b) multi-fidelity: nn-default's predictions as extra features of the MLP peer (and of
+    # the sweep NN with --learners mlp,sweep-nn)
     python bench/surrogate/refine_sweep.py stacked --data datasets/default-sweep \
         --test-data datasets/default-sweep-test --low models/nn-default --sizes 1024,2460
 
@@ -36,6 +37,7 @@ def _active(args: argparse.Namespace) -> int:
           f"{sel['score_mean']['picked']:.4f}, next Sobol {sel['score_mean']['next_sobol']:.4f}")
     print("composition:", json.dumps(sel["composition"]))
     print(active.table(record))
+    print(active.attachment_table(record))
     return 0
 
 
@@ -45,7 +47,10 @@ def _stacked(args: argparse.Namespace) -> int:
                                    sizes=[int(s) for s in args.sizes.split(",")],
                                    freqs_hz=[float(f) for f in args.freqs.split(",")],
                                    modes=args.modes, profile_modes=args.profile_modes,
-                                   seed=args.seed, log=lambda s: print(s, flush=True))
+                                   seed=args.seed, learner_names=args.learners.split(","),
+                                   nn_options=json.loads(args.nn_options),
+                                   test_fraction=args.test_fraction,
+                                   log=lambda s: print(s, flush=True))
     print(multifidelity.table(record))
     if args.json:
         Path(args.json).write_text(json.dumps(record, indent=1))
@@ -80,6 +85,12 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("--modes", type=int, default=48)
     s.add_argument("--profile-modes", type=int, default=24)
     s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--learners", default="mlp",
+                   help="mlp (the output-choice MLP peer, complex band) and/or sweep-nn (the "
+                   "network of hapticrom train --kind nn), comma-separated")
+    s.add_argument("--nn-options", default="{}", help="sweep-nn: its options (JSON)")
+    s.add_argument("--test-fraction", type=float, default=0.1,
+                   help="sweep-nn: the designs held out of the fit, as hapticrom train's")
     s.add_argument("--threads", type=int, default=1, help="BLAS threads")
     s.add_argument("--json", default=None)
     s.set_defaults(run=_stacked)

@@ -30,10 +30,10 @@ import numpy as np
 from surrogate.refine import band_disagreement, select_batch
 from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor
-from surrogate.sweep.targets import load_sweep_datasets
+from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
 from surrogate.sweep.train import train_sweep
 
-__all__ = ["METRICS", "pick_active", "row", "run", "table"]
+__all__ = ["METRICS", "attachment_table", "by_attachment", "pick_active", "row", "run", "table"]
 
 #: (label, card output, metric) of a table row, in order
 METRICS = (("centre median", "center_amplitude_um", "median_rel_err"),
@@ -114,6 +114,10 @@ def run(data: str | Path, test_data: Sequence[str | Path], out_dir: str | Path, 
                   test_fraction, log)
     record["models"]["start"] = {"designs": start, "seed": seeds[0],
                                  "test": row(card["test_set"]["metrics"])}
+    tests = load_sweep_datasets(list(test_data))
+    grouped = "attachment" in [s.name for s in tests.specs]
+    if grouped:
+        record["models"]["start"]["by_attachment"] = by_attachment(out_dir / "start", tests)
     picks_file = out_dir / "active_picks.json"
     if picks_file.exists():
         saved = json.loads(picks_file.read_text())
@@ -148,8 +152,32 @@ def run(data: str | Path, test_data: Sequence[str | Path], out_dir: str | Path, 
                                   "fitted": card["training"]["rows"],
                                   "test": row(card["test_set"]["metrics"]),
                                   "held_out": row(card["metrics"])}
+        if grouped:
+            record["models"][name]["by_attachment"] = by_attachment(out_dir / name, tests)
         (out_dir / "record.json").write_text(json.dumps(record, indent=1))
     return record
+
+
+def by_attachment(model: str | Path, test: SweepData) -> dict[str, dict[str, float]]:
+    """The model's centre and edge median and p95 relative errors on the test designs of
+    each attachment (glued, pogo), every band frequency (fractions)."""
+    predictor = load_predictor(model)
+    names = [s.name for s in test.specs]
+    spec = test.specs[names.index("attachment")]
+    att = np.asarray(spec.choices)[test.codes[:, names.index("attachment")].astype(int)]
+    out = {}
+    for choice in spec.choices:
+        designs = np.flatnonzero(att == choice)
+        codes, centre, profile, _ = pair_rows(test, designs)
+        pred = predictor.predict(codes)
+        entry = {"designs": int(designs.size)}
+        for label, got, y in (("centre", pred["center_amplitude_um"], centre),
+                              ("edge", pred["edge_amplitude_um"], profile[:, 0])):
+            rel = np.abs(got / y - 1.0)
+            entry[f"{label} median"] = float(np.median(rel))
+            entry[f"{label} p95"] = float(np.percentile(rel, 95))
+        out[str(choice)] = entry
+    return out
 
 
 def _composition(sweep: Any, idx: np.ndarray) -> dict[str, float]:
@@ -183,6 +211,23 @@ def table(record: dict[str, Any]) -> str:
         if len(runs) > 1:
             lines.append(f"| {arm}: spread over {len(runs)} seeds | | " + " | ".join(
                 _pct(max(r[k] for r in runs) - min(r[k] for r in runs)) for k in labels) + " |")
+    return "\n".join(lines)
+
+
+def attachment_table(record: dict[str, Any]) -> str:
+    """Centre and edge median / p95 [%] of each model on the test designs of each attachment
+    (empty when the record has none)."""
+    models = {n: m["by_attachment"] for n, m in record["models"].items() if "by_attachment" in m}
+    if not models:
+        return ""
+    groups = list(next(iter(models.values())))
+    lines = ["| model | " + " | ".join(f"{g} ({models[next(iter(models))][g]['designs']} "
+                                       "designs): centre / edge median / p95 %" for g in groups)
+             + " |", "|---|" + "---|" * len(groups)]
+    for name, by in models.items():
+        lines.append(f"| {name} | " + " | ".join(
+            f"{_pct(by[g]['centre median'])} / {_pct(by[g]['centre p95'])}, "
+            f"{_pct(by[g]['edge median'])} / {_pct(by[g]['edge p95'])}" for g in groups) + " |")
     return "\n".join(lines)
 
 

@@ -31,6 +31,10 @@ from surrogate.data.store import Store
 from surrogate.features import codes_from_frame
 from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import load_predictor
+from surrogate.sweep.export import member_targets
+from surrogate.sweep.nn import fit_sweep
+from surrogate.sweep.targets import load_sweep_datasets, log_magnitudes
+from surrogate.train import split
 
 __all__ = ["design_codes", "low_features", "overlap", "run", "stacked", "table"]
 
@@ -111,12 +115,63 @@ def stacked(sw: sweeps.Sweeps, feats: np.ndarray) -> sweeps.Sweeps:
     return dataclasses.replace(sw, x=np.column_stack([sw.x, feats]))
 
 
+def sweep_nn_answers(est: Any, targets: Any, X: np.ndarray, chunk: int = 128
+                     ) -> representations.Answers:
+    """Centre, edge and profile magnitudes [um] at every band frequency of a sweep NN fitted
+    by :func:`surrogate.sweep.nn.fit_sweep` on feature rows ``X`` (what its graph's
+    ``log_mean`` gives at the band's grid: the members' mean of ln |u|)."""
+    parts = []
+    for a in range(0, len(X), chunk):
+        ln_s, z = targets.components(member_targets(est, X[a:a + chunk]))
+        parts.append(np.exp(log_magnitudes(z, ln_s[..., None]).mean(axis=0)))
+    mag = np.concatenate(parts)                                   # (n, n_f, P)
+    return representations.Answers(mag[..., 0], mag[..., 1], mag[..., 1:])
+
+
+def _sweep_nn_records(data: str | Path, test_data: str | Path, truth: representations.Answers,
+                      sizes: Sequence[int], f_train: np.ndarray, f_test: np.ndarray, seed: int,
+                      options: dict[str, Any], test_fraction: float,
+                      log: Callable[[str], None]) -> list[dict[str, Any]]:
+    """The sweep NN of ``hapticrom train --kind nn`` (its two stages, ``options``) fitted on
+    the split ``hapticrom train --test-fraction`` makes of the first ``size`` designs, with
+    and without the stacked features (``f_train``: one row per first design), scored on
+    every test design against ``truth``."""
+    train = load_sweep_datasets([data]).take(np.arange(len(f_train)))
+    test = load_sweep_datasets([test_data])
+    X_test = encode(test.codes, test.specs)
+    out = []
+    for size in sizes:
+        fit_rows, _ = split(size, test_fraction, seed)
+        for inputs, feats in (("design", None), ("design + low-fidelity", f_train)):
+            t0 = time.perf_counter()
+            est, targets = fit_sweep(train, fit_rows, seed=seed, options=dict(options),
+                                     features=feats)
+            fit_s = time.perf_counter() - t0
+            X = X_test if feats is None else np.column_stack([X_test, f_test])
+            rec = {"learner": "sweep NN", "choice": "complex band (hapticrom train)",
+                   "size": size, "inputs": inputs, "train_rows": int(fit_rows.size),
+                   "fit_s": fit_s, **study.score(sweep_nn_answers(est, targets, X), truth)}
+            out.append(rec)
+            log(f"sweep NN, {size} designs ({fit_rows.size} fitted), {inputs}: centre "
+                f"{100 * rec['centre_median']:.2f} / {100 * rec['centre_p95']:.1f} % "
+                f"({fit_s:.0f} s)")
+    return out
+
+
 def run(data: str | Path, test_data: str | Path, low: str | Path, *,
         sizes: Sequence[int] = (1024, 2460), freqs_hz: Sequence[float] = (100, 150, 200, 250),
-        modes: int = 48, profile_modes: int = 24, seed: int = 0, learner: str = "mlp",
-        log: Callable[[str], None] = print) -> dict[str, Any]:
+        modes: int = 48, profile_modes: int = 24, seed: int = 0,
+        learner_names: Sequence[str] = ("mlp",), nn_options: dict[str, Any] | None = None,
+        test_fraction: float = 0.1, log: Callable[[str], None] = print) -> dict[str, Any]:
     """The study's record: the overlap check, the low-fidelity model alone on the test
-    designs, and per training size the learner with and without the stacked features."""
+    designs, and per training size each learner with and without the stacked features.
+    ``learner_names``: ``mlp`` (the output-choice study's peer on its complex band, ``modes`` +
+    ``profile_modes``, every one of the first ``size`` designs) and ``sweep-nn`` (the network
+    of ``hapticrom train --kind nn`` with ``nn_options``, on the split ``--test-fraction``
+    ``test_fraction`` makes of them)."""
+    unknown = set(learner_names) - {"mlp", "sweep-nn"}
+    if unknown:
+        raise ValueError(f"learners {sorted(unknown)}: allowed mlp, sweep-nn")
     n_max = max(sizes)
     full, specs = sweeps.load(str(data), limit=n_max)
     if len(full) < n_max:
@@ -130,30 +185,33 @@ def run(data: str | Path, test_data: str | Path, low: str | Path, *,
     record: dict[str, Any] = {
         "data": str(data), "test_data": str(test_data), "low": str(low),
         "freqs_hz": [float(f) for f in freqs_hz], "modes": modes,
-        "profile_modes": profile_modes, "seed": seed, "learner": learner,
+        "profile_modes": profile_modes, "seed": seed, "learners": list(learner_names),
         "low_features_s": time.perf_counter() - t0,
         "extrapolated_share": {"train": out_train, "test": out_test},
         "overlap": overlap(low, test_codes, specs), "records": []}
     log(f"overlap of {low}'s training designs with the test designs: {record['overlap']}")
     truth = representations.Answers.of(test)
-    record["records"].append({"size": None, "inputs": f"{Path(low).name} alone",
+    record["records"].append({"learner": Path(low).name, "size": None, "inputs": "alone",
                               **study.score(low_answers(low, test_codes, specs, test.band),
                                             truth)})
-    for size in sizes:
+    for size in sizes if "mlp" in learner_names else ():
         rows = np.arange(size)
         for inputs, tr, te in (("design", full.take(rows), test),
                                ("design + low-fidelity",
                                 stacked(full.take(rows), f_train[rows]),
                                 stacked(test, f_test))):
-            made = learners.make(learner, seed)
+            made = learners.make("mlp", seed)
             recs = study.run(tr, te, [made], [representations.ComplexBand(modes, profile_modes)],
                              seed, log=lambda s: None)
             rec = next(r for r in recs if r["learner"] != study.FLOOR)
             rec.update(size=size, inputs=inputs)
             record["records"].append(rec)
-            log(f"{size} designs, {inputs}: centre {100 * rec['centre_median']:.2f} / "
+            log(f"mlp, {size} designs, {inputs}: centre {100 * rec['centre_median']:.2f} / "
                 f"{100 * rec['centre_p95']:.1f} %, edge {100 * rec['edge_median']:.2f} / "
                 f"{100 * rec['edge_p95']:.1f} % ({rec['fit_s']:.0f} s)")
+    if "sweep-nn" in learner_names:
+        record["records"] += _sweep_nn_records(data, test_data, truth, sizes, f_train, f_test,
+                                               seed, dict(nn_options or {}), test_fraction, log)
     return record
 
 
@@ -164,11 +222,13 @@ def _q(r: dict[str, Any], name: str) -> str:
 
 def table(record: dict[str, Any]) -> str:
     """The record as a markdown table (errors in %)."""
-    lines = ["| designs | inputs | centre med / p95 / p99 / max % | edge med / p95 / p99 / max % "
-             "| max err / field % | profile L2 median % |", "|---|---|---|---|---|---|"]
+    lines = ["| learner | designs | inputs | centre med / p95 / p99 / max % "
+             "| edge med / p95 / p99 / max % | max err / field % | profile L2 median % |",
+             "|---|---|---|---|---|---|---|"]
     for r in record["records"]:
         prof = r.get("profile_l2_median")
-        lines.append(f"| {r['size'] or '-'} | {r['inputs']} | {_q(r, 'centre')} | "
+        lines.append(f"| {r.get('learner', '-')} | {r['size'] or '-'} | {r['inputs']} | "
+                     f"{_q(r, 'centre')} | "
                      f"{_q(r, 'edge')} | {100 * r['max_field']:.1f} | "
                      f"{'-' if prof is None else f'{100 * prof:.2f}'} |")
     return "\n".join(lines)

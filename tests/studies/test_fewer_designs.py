@@ -14,7 +14,10 @@ from sweep_fixture import OPTIONS, make_dataset
 from studies.fewer_designs import active, multifidelity
 from studies.output_choice import data as sweeps
 from surrogate.refine import band_disagreement
-from surrogate.runtime.predictor import load_predictor
+from surrogate.runtime.encoding import encode
+from surrogate.runtime.predictor import load_predictor, make_session
+from surrogate.sweep.export import export_sweep_nn
+from surrogate.sweep.nn import fit_sweep
 from surrogate.sweep.targets import load_sweep_datasets
 
 
@@ -55,6 +58,10 @@ def test_the_active_arm_adds_the_pool_designs_the_start_model_is_least_sure_of(s
     table = active.table(record)
     assert table.count("\n") == 1 + len(record["models"])
     assert "| active-seed0 | 36 |" in table
+    by = record["models"]["sobol-seed0"]["by_attachment"]
+    assert set(by) == {"glued", "pogo"}
+    assert by["glued"]["designs"] + by["pogo"]["designs"] == 12
+    assert active.attachment_table(record).count("\n") == 1 + len(record["models"])
 
 
 def test_each_arm_trains_on_its_designs_only_and_a_rerun_reuses_the_models(sweep_dataset,
@@ -111,14 +118,43 @@ def test_stacking_appends_the_low_fidelity_predictions_as_features(sweep_dataset
 
 def test_the_stacked_study_scores_the_same_learner_with_and_without(sweep_dataset, sweep_model,
                                                                     test_set):
-    record = multifidelity.run(sweep_dataset, test_set, sweep_model, sizes=(24, 48),
+    record = multifidelity.run(sweep_dataset, test_set, sweep_model, sizes=(24,),
                                freqs_hz=(100.0, 200.0), modes=6, profile_modes=4,
                                log=lambda s: None)
     rows = record["records"]
-    assert [(r["size"], r["inputs"]) for r in rows] == [
-        (None, "nn-sweep-fixture alone"), (24, "design"), (24, "design + low-fidelity"),
-        (48, "design"), (48, "design + low-fidelity")]
+    assert [(r["learner"], r["size"], r["inputs"]) for r in rows] == [
+        ("nn-sweep-fixture", None, "alone"), ("mlp", 24, "design"),
+        ("mlp", 24, "design + low-fidelity")]
     assert record["overlap"]["identical"] == 0
     assert all(np.isfinite(r["centre_median"]) for r in rows)
     assert rows[0]["profile_l2_median"] is None
     assert multifidelity.table(record).count("\n") == 1 + len(rows)
+
+
+def test_the_sweep_nn_learns_with_the_stacked_features_and_answers_as_its_graph(
+        sweep_dataset, sweep_model, test_set):
+    data = load_sweep_datasets([sweep_dataset])
+    designs = np.arange(30)
+    est, targets = fit_sweep(data, designs, options=dict(OPTIONS))
+    X = encode(data.codes[30:], data.specs)
+    got = multifidelity.sweep_nn_answers(est, targets, X, chunk=5)
+    session = make_session(export_sweep_nn(est, targets, False, data.band_hz[0],
+                                           data.band_hz[-1], data.band_hz, {}))
+    n_f = data.band_hz.size
+    f = (data.band_hz - data.band_hz[0]) / (data.band_hz[-1] - data.band_hz[0])
+    x = np.column_stack([np.repeat(X, n_f, axis=0), np.tile(f, len(X))]).astype(np.float32)
+    log_mean = session.run(["log_mean"], {"x": x})[0].reshape(len(X), n_f, -1)
+    np.testing.assert_allclose(np.log(got.center), log_mean[..., 0], atol=1e-4)
+    np.testing.assert_allclose(np.log(got.edge), log_mean[..., 1], atol=1e-4)
+    np.testing.assert_allclose(np.log(got.profile), log_mean[..., 3:], atol=1e-4)
+    with pytest.raises(ValueError, match="features: 3 rows for 48 designs"):
+        fit_sweep(data, designs, options=dict(OPTIONS), features=np.ones((3, 2)))
+    record = multifidelity.run(sweep_dataset, test_set, sweep_model, sizes=(30,),
+                               freqs_hz=(150.0,), learner_names=("sweep-nn",),
+                               nn_options=dict(OPTIONS), log=lambda s: None)
+    rows = record["records"][1:]
+    assert [(r["learner"], r["inputs"], r["train_rows"]) for r in rows] == [
+        ("sweep NN", "design", 27), ("sweep NN", "design + low-fidelity", 27)]
+    assert all(np.isfinite(r["centre_p95"]) and r["profile_l2_median"] > 0 for r in rows)
+    with pytest.raises(ValueError, match="allowed mlp, sweep-nn"):
+        multifidelity.run(sweep_dataset, test_set, sweep_model, learner_names=("gp",))
