@@ -8,7 +8,7 @@ better designs").
     python bench/surrogate/refine_sweep.py active --data datasets/default-sweep \
         --test-data datasets/default-sweep-test --out-dir out/refine-sweep
     # (b) multi-fidelity: nn-default's predictions as extra features of the MLP peer (and of
-    # the sweep NN with --learners mlp,sweep-nn)
+    # the sweep NN with --learners mlp-peer,sweep-nn)
     python bench/surrogate/refine_sweep.py stacked --data datasets/default-sweep \
         --test-data datasets/default-sweep-test --low models/nn-default --sizes 1024,2460
 
@@ -85,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("--modes", type=int, default=48)
     s.add_argument("--profile-modes", type=int, default=24)
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--learners", default="mlp",
-                   help="mlp (the output-choice MLP peer, complex band) and/or sweep-nn (the "
+    s.add_argument("--learners", default="mlp-peer",
+                   help="mlp-peer (the output-choice MLP peer, complex band) and/or sweep-nn (the "
                    "network of hapticrom train --kind nn), comma-separated")
     s.add_argument("--nn-options", default="{}", help="sweep-nn: its options (JSON)")
     s.add_argument("--test-fraction", type=float, default=0.1,

@@ -36,7 +36,8 @@ from surrogate.sweep.nn import fit_sweep
 from surrogate.sweep.targets import load_sweep_datasets, log_magnitudes
 from surrogate.train import split
 
-__all__ = ["design_codes", "low_features", "overlap", "run", "stacked", "table"]
+__all__ = ["STACKED", "Setup", "design_codes", "low_answers", "low_features", "mlp_records",
+           "overlap", "run", "stacked", "sweep_nn_answers", "sweep_nn_records", "table"]
 
 
 def design_codes(path: str | Path, specs: Sequence[InputSpec]) -> np.ndarray:
@@ -128,50 +129,100 @@ def sweep_nn_answers(est: Any, targets: Any, X: np.ndarray, chunk: int = 128
     return representations.Answers(mag[..., 0], mag[..., 1], mag[..., 1:])
 
 
-def _sweep_nn_records(data: str | Path, test_data: str | Path, truth: representations.Answers,
-                      sizes: Sequence[int], f_train: np.ndarray, f_test: np.ndarray, seed: int,
-                      options: dict[str, Any], test_fraction: float,
-                      log: Callable[[str], None]) -> list[dict[str, Any]]:
-    """The sweep NN of ``hapticrom train --kind nn`` (its two stages, ``options``) fitted on
-    the split ``hapticrom train --test-fraction`` makes of the first ``size`` designs, with
-    and without the stacked features (``f_train``: one row per first design), scored on
-    every test design against ``truth``."""
-    train = load_sweep_datasets([data]).take(np.arange(len(f_train)))
-    test = load_sweep_datasets([test_data])
+@dataclasses.dataclass(frozen=True)
+class Setup:
+    """What every learner of the study is run on: the sweep datasets (paths and, as
+    :class:`studies.output_choice.data.Sweeps`, the first designs and the test designs with
+    the test truth), the sizes, the stacked features of the first designs and of the test
+    designs, and the learners' settings."""
+
+    data: str | Path
+    test_data: str | Path
+    train: sweeps.Sweeps
+    test: sweeps.Sweeps
+    truth: representations.Answers
+    sizes: Sequence[int]
+    f_train: np.ndarray
+    f_test: np.ndarray
+    seed: int
+    modes: int
+    profile_modes: int
+    nn_options: dict[str, Any]
+    test_fraction: float
+    log: Callable[[str], None]
+
+
+def _line(rec: dict[str, Any]) -> str:
+    return (f"{rec['learner']}, {rec['size']} designs, {rec['inputs']}: centre "
+            f"{100 * rec['centre_median']:.2f} / {100 * rec['centre_p95']:.1f} %, edge "
+            f"{100 * rec['edge_median']:.2f} / {100 * rec['edge_p95']:.1f} % "
+            f"({rec['fit_s']:.0f} s)")
+
+
+def mlp_records(s: Setup) -> list[dict[str, Any]]:
+    """The output-choice study's MLP peer on its complex band (``modes`` + ``profile_modes``),
+    fitted on every one of the first ``size`` designs, with and without the stacked
+    features."""
+    out = []
+    for size in s.sizes:
+        rows = np.arange(size)
+        for inputs, tr, te in (("design", s.train.take(rows), s.test),
+                               ("design + low-fidelity", stacked(s.train.take(rows),
+                                                                 s.f_train[rows]),
+                                stacked(s.test, s.f_test))):
+            recs = study.run(tr, te, [learners.make("mlp", s.seed)],
+                             [representations.ComplexBand(s.modes, s.profile_modes)], s.seed,
+                             log=lambda _: None)
+            rec = next(r for r in recs if r["learner"] != study.FLOOR)
+            rec.update(size=size, inputs=inputs)
+            out.append(rec)
+            s.log(_line(rec))
+    return out
+
+
+def sweep_nn_records(s: Setup) -> list[dict[str, Any]]:
+    """The sweep NN of ``hapticrom train --kind nn`` (its two stages, ``nn_options``) fitted
+    on the split ``hapticrom train --test-fraction`` makes of the first ``size`` designs, with
+    and without the stacked features, scored on every test design at the band's grid."""
+    train = load_sweep_datasets([s.data]).take(np.arange(len(s.f_train)))
+    test = load_sweep_datasets([s.test_data])
     X_test = encode(test.codes, test.specs)
     out = []
-    for size in sizes:
-        fit_rows, _ = split(size, test_fraction, seed)
-        for inputs, feats in (("design", None), ("design + low-fidelity", f_train)):
+    for size in s.sizes:
+        fit_rows, _ = split(size, s.test_fraction, s.seed)
+        for inputs, feats in (("design", None), ("design + low-fidelity", s.f_train)):
             t0 = time.perf_counter()
-            est, targets = fit_sweep(train, fit_rows, seed=seed, options=dict(options),
+            est, targets = fit_sweep(train, fit_rows, seed=s.seed, options=dict(s.nn_options),
                                      features=feats)
             fit_s = time.perf_counter() - t0
-            X = X_test if feats is None else np.column_stack([X_test, f_test])
+            X = X_test if feats is None else np.column_stack([X_test, s.f_test])
             rec = {"learner": "sweep NN", "choice": "complex band (hapticrom train)",
                    "size": size, "inputs": inputs, "train_rows": int(fit_rows.size),
-                   "fit_s": fit_s, **study.score(sweep_nn_answers(est, targets, X), truth)}
+                   "fit_s": fit_s, **study.score(sweep_nn_answers(est, targets, X), s.truth)}
             out.append(rec)
-            log(f"sweep NN, {size} designs ({fit_rows.size} fitted), {inputs}: centre "
-                f"{100 * rec['centre_median']:.2f} / {100 * rec['centre_p95']:.1f} % "
-                f"({fit_s:.0f} s)")
+            s.log(_line(rec))
     return out
+
+
+#: The learners of the study by name (``learner_names`` of :func:`run`).
+STACKED: dict[str, Callable[[Setup], list[dict[str, Any]]]] = {
+    "mlp-peer": mlp_records, "sweep-nn": sweep_nn_records}
 
 
 def run(data: str | Path, test_data: str | Path, low: str | Path, *,
         sizes: Sequence[int] = (1024, 2460), freqs_hz: Sequence[float] = (100, 150, 200, 250),
         modes: int = 48, profile_modes: int = 24, seed: int = 0,
-        learner_names: Sequence[str] = ("mlp",), nn_options: dict[str, Any] | None = None,
+        learner_names: Sequence[str] = ("mlp-peer",), nn_options: dict[str, Any] | None = None,
         test_fraction: float = 0.1, log: Callable[[str], None] = print) -> dict[str, Any]:
     """The study's record: the overlap check, the low-fidelity model alone on the test
     designs, and per training size each learner with and without the stacked features.
-    ``learner_names``: ``mlp`` (the output-choice study's peer on its complex band, ``modes`` +
+    ``learner_names``: ``mlp-peer`` (the output-choice study's peer on its complex band, ``modes`` +
     ``profile_modes``, every one of the first ``size`` designs) and ``sweep-nn`` (the network
     of ``hapticrom train --kind nn`` with ``nn_options``, on the split ``--test-fraction``
     ``test_fraction`` makes of them)."""
-    unknown = set(learner_names) - {"mlp", "sweep-nn"}
+    unknown = sorted(set(learner_names) - set(STACKED))
     if unknown:
-        raise ValueError(f"learners {sorted(unknown)}: allowed mlp, sweep-nn")
+        raise ValueError(f"learners {unknown}: allowed {', '.join(STACKED)}")
     n_max = max(sizes)
     full, specs = sweeps.load(str(data), limit=n_max)
     if len(full) < n_max:
@@ -194,24 +245,10 @@ def run(data: str | Path, test_data: str | Path, low: str | Path, *,
     record["records"].append({"learner": Path(low).name, "size": None, "inputs": "alone",
                               **study.score(low_answers(low, test_codes, specs, test.band),
                                             truth)})
-    for size in sizes if "mlp" in learner_names else ():
-        rows = np.arange(size)
-        for inputs, tr, te in (("design", full.take(rows), test),
-                               ("design + low-fidelity",
-                                stacked(full.take(rows), f_train[rows]),
-                                stacked(test, f_test))):
-            made = learners.make("mlp", seed)
-            recs = study.run(tr, te, [made], [representations.ComplexBand(modes, profile_modes)],
-                             seed, log=lambda s: None)
-            rec = next(r for r in recs if r["learner"] != study.FLOOR)
-            rec.update(size=size, inputs=inputs)
-            record["records"].append(rec)
-            log(f"mlp, {size} designs, {inputs}: centre {100 * rec['centre_median']:.2f} / "
-                f"{100 * rec['centre_p95']:.1f} %, edge {100 * rec['edge_median']:.2f} / "
-                f"{100 * rec['edge_p95']:.1f} % ({rec['fit_s']:.0f} s)")
-    if "sweep-nn" in learner_names:
-        record["records"] += _sweep_nn_records(data, test_data, truth, sizes, f_train, f_test,
-                                               seed, dict(nn_options or {}), test_fraction, log)
+    setup = Setup(data, test_data, full, test, truth, sizes, f_train, f_test, seed, modes,
+                  profile_modes, dict(nn_options or {}), test_fraction, log)
+    for name in learner_names:
+        record["records"] += STACKED[name](setup)
     return record
 
 

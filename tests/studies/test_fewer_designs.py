@@ -156,5 +156,5 @@ def test_the_sweep_nn_learns_with_the_stacked_features_and_answers_as_its_graph(
     assert [(r["learner"], r["inputs"], r["train_rows"]) for r in rows] == [
         ("sweep NN", "design", 27), ("sweep NN", "design + low-fidelity", 27)]
     assert all(np.isfinite(r["centre_p95"]) and r["profile_l2_median"] > 0 for r in rows)
-    with pytest.raises(ValueError, match="allowed mlp, sweep-nn"):
+    with pytest.raises(ValueError, match="allowed mlp-peer, sweep-nn"):
         multifidelity.run(sweep_dataset, test_set, sweep_model, learner_names=("gp",))
