@@ -9,7 +9,9 @@ does not spend itself on one corner. The new rows join the dataset (``generate(o
 retrain the shipped models from it with ``hapticrom train``.
 
 Selection works on any pool: :func:`select_batch` is also what ``bench/surrogate/refine.py``
-uses to compare refinement against plain Sobol order on the shipped dataset.
+uses to compare refinement against plain Sobol order on the shipped dataset, and, with a sweep
+model's :func:`band_disagreement` as the score, what ``bench/surrogate/refine_sweep.py``
+(:mod:`studies.fewer_designs.active`) uses on a sweep dataset.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from surrogate.features import codes_from_frame
 from surrogate.runtime.encoding import encode
 from surrogate.train import load_datasets
 
-__all__ = ["RefineReport", "refine", "select_batch", "uncertainty"]
+__all__ = ["RefineReport", "band_disagreement", "refine", "select_batch", "uncertainty"]
 
 #: Candidates scored per sample asked for.
 POOL_PER_SAMPLE = 16
@@ -58,6 +60,26 @@ def uncertainty(model: Any, X: np.ndarray) -> np.ndarray:
     """Total predictive variance of the log amplitudes at feature rows ``X``."""
     _, std = model.predict(X, return_std=True)
     return np.sum(np.atleast_2d(std.T).T ** 2, axis=1)
+
+
+def band_disagreement(predictor: Any, codes: np.ndarray, band_hz: np.ndarray,
+                      outputs: tuple[str, ...] = ("center_amplitude_um", "edge_amplitude_um"),
+                      chunk: int = 256) -> np.ndarray:
+    """Per design of ``codes`` (n, d: design codes without the frequency), a sweep model's
+    disagreement with itself: its log std of ``outputs`` (for an NN ensemble the members'
+    spread of ln |u|, for a GP its predictive std) averaged over the frequencies ``band_hz``
+    and the outputs. ``predictor``: a :class:`surrogate.runtime.predictor.Predictor` whose
+    last input is ``frequency_hz`` (load it with ``calibrated=False`` for the graph's raw
+    spread)."""
+    n_f = len(band_hz)
+    out = np.empty(len(codes))
+    for a in range(0, len(codes), chunk):
+        block = codes[a:a + chunk]
+        pairs = np.column_stack([np.repeat(block, n_f, axis=0), np.tile(band_hz, len(block))])
+        pred = predictor.predict(pairs)
+        std = np.stack([pred[f"{name}_log_std"] for name in outputs], axis=-1)
+        out[a:a + chunk] = std.reshape(len(block), -1).mean(axis=1)
+    return out
 
 
 def select_batch(score: np.ndarray, X: np.ndarray, k: int,

@@ -88,12 +88,20 @@ def _graph_parity(est: Any, targets: BandTargets, predictor: Predictor, data: Sw
 
 def fit_sweep(data: SweepData, designs: np.ndarray, *, seed: int = 0,
               n_modes: int | None = None, normal: bool = False,
-              options: dict[str, Any] | None = None) -> tuple[Any, BandTargets]:
+              options: dict[str, Any] | None = None,
+              features: np.ndarray | None = None) -> tuple[Any, BandTargets]:
     """(fitted :class:`surrogate.estimators.nn.MLPEnsembleRegressor`, fitted
     :class:`BandTargets`) of the rows ``designs`` of ``data`` (``options``: the sweep options of
-    the module docstring and the estimator's)."""
+    the module docstring and the estimator's). ``features`` (one row per design of ``data``):
+    extra inputs appended to the encoded design features, e.g. another model's predictions
+    (:mod:`studies.fewer_designs.multifidelity`); the exported graph cannot compute them, so
+    such a fit is for measurement (:func:`member_targets` on the same columns), not export."""
     ours, est_options = split_nn_options(dict(options or {}))
     X = encode(data.codes[designs], data.specs)
+    if features is not None:
+        if len(features) != len(data.codes):
+            raise ValueError(f"features: {len(features)} rows for {len(data.codes)} designs")
+        X = np.column_stack([X, np.asarray(features, dtype=float)[designs]])
     targets = BandTargets(centre_modes=ours["centre_modes"], profile_modes=n_modes or 128,
                           spatial_tol=ours["spatial_tol"])
     T = targets.fit_transform(data.response[designs])

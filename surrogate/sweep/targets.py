@@ -101,6 +101,20 @@ class SweepData:
         """The model's inputs: the design inputs, then ``frequency_hz``."""
         return [*self.specs, frequency_spec(self.band_hz)]
 
+    def take(self, designs: Sequence[int] | np.ndarray) -> SweepData:
+        """The designs (row positions, in this data's design-sequence order) ``designs``
+        only, in that order; a :class:`fieldspec.FieldError` naming ``designs`` when one is
+        out of range or repeated."""
+        idx = np.asarray(designs)
+        n = len(self.codes)
+        if idx.ndim != 1 or idx.size == 0 or not np.issubdtype(idx.dtype, np.integer) \
+                or idx.min() < 0 or idx.max() >= n or np.unique(idx).size != idx.size:
+            raise FieldError("designs", f"designs: need distinct integer row positions in "
+                             f"[0, {n - 1}] (the ok designs of the training datasets), "
+                             f"got {idx.size} values")
+        return SweepData(self.specs, self.codes[idx], self.band_hz, self.grid_mm,
+                         self.response[idx], self.edge_radius_mm[idx], self.sources)
+
 
 def _response(df: Any, n_f: int, n_p: int) -> np.ndarray:
     """(n, n_f, 1 + n_p, 6) float32 [um] of a frame's sweep columns."""

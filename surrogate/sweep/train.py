@@ -37,7 +37,7 @@ from surrogate.sweep.scoring import load_test_data, score_test_set
 from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import _calibration_rows, card_head, check_outputs, evaluate, split
 
-__all__ = ["band_tails", "sweep_metrics", "train_sweep"]
+__all__ = ["band_tails", "design_ranges", "sweep_metrics", "train_sweep"]
 
 
 
@@ -69,18 +69,33 @@ def sweep_metrics(predictor: Predictor, data: SweepData, designs: np.ndarray,
     return out
 
 
+def design_ranges(designs: Sequence[int] | np.ndarray, n: int) -> dict[str, Any]:
+    """What a card records of a design subset: how many of the ``n`` ok designs, and which,
+    as sorted half-open ranges [start, stop) of row positions."""
+    idx = np.sort(np.asarray(designs))
+    breaks = np.flatnonzero(np.diff(idx) != 1) + 1 if idx.size else np.array([], int)
+    ranges = [[int(r[0]), int(r[-1]) + 1] for r in np.split(idx, breaks) if r.size]
+    return {"designs": int(idx.size), "of": int(n), "ranges": ranges,
+            "rows": "positions among the training datasets' ok designs in design-sequence "
+            "order"}
+
+
 def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
                 test_fraction: float = 0.2, seed: int = 0, n_modes: int | None = None,
                 overwrite: bool = False, categorical: str = "onehot",
                 options: dict[str, Any] | None = None, outputs: Sequence[str] = ("profile_um",),
                 calibration_fraction: float | None = None,
-                test_data: Sequence[str | Path] = ()) -> dict[str, Any]:
+                test_data: Sequence[str | Path] = (),
+                designs: Sequence[int] | np.ndarray | None = None) -> dict[str, Any]:
     """Train an NN or GP sweep model on the sweep datasets ``paths`` and write ``out``
     (arguments as :func:`surrogate.train.train`; the split and the calibration rows are
     designs); return its card. ``test_data``: sweep datasets of fresh designs the card is also
     scored on (its ``test_set``, :mod:`surrogate.sweep.scoring`). ``hapticrom train`` calls
     it when every dataset is a sweep dataset. The GP: :mod:`surrogate.sweep.gp` (``options``:
-    its ``GP_OPTIONS``)."""
+    its ``GP_OPTIONS``). ``designs``: train on these designs only (row positions among the
+    datasets' ok designs, each dataset in its design-sequence order, the datasets one after
+    the other); the split and the calibration rows are then drawn from them, and the card
+    records them (``training.design_subset``). None: every design."""
     spec = get_kind(kind)
     if spec.sweep is None:
         raise FieldError("--kind", f"--kind {kind}: sweep datasets train the "
@@ -91,6 +106,11 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
     checked = spec.sweep.check_options(options)
     check_model_out(out, overwrite)
     data = load_sweep_datasets(paths, categorical=categorical)
+    subset = None
+    if designs is not None:
+        n_all = len(data.codes)
+        data = data.take(designs)
+        subset = design_ranges(designs, n_all)
     test = load_test_data(test_data, data, categorical) if test_data else None
     normal = "profile_normal_um" in extra
     tr, te = split(len(data.codes), test_fraction, seed)
@@ -108,7 +128,8 @@ def train_sweep(paths: Sequence[str | Path], kind: str, out: str | Path, *,
         "training": {"rows": int(tr.size), "held_out": int(te.size), "split": "by design",
                      "held_out_pairs": int(te.size * data.band_hz.size), "seed": seed,
                      "test_fraction": test_fraction, "pod_modes": targets.n_modes,
-                     "pod_energy": min(representation["pod_energy"].values()), **fitted},
+                     "pod_energy": min(representation["pod_energy"].values()),
+                     **({"design_subset": subset} if subset is not None else {}), **fitted},
         "versions": package_versions()}
     meta = {k: card[k] for k in ("kind", "inputs", "outputs", "profile_distance_mm",
                                  "training_data", "representation")}

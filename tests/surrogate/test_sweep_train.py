@@ -175,3 +175,35 @@ def test_intervals_of_a_sweep_model_calibrate_on_its_held_out_designs(sweep_data
     assert rows["pairs_per_design"] == BAND_HZ.size
     assert set(entry["groups"]) == {"center", "edge", "profile", "profile_normal_um"}
     assert 0.0 <= entry["coverage95_check"]["after"]["center_amplitude_um"] <= 1.0
+
+
+def test_a_design_subset_trains_on_those_designs_only_and_the_card_names_them(sweep_data,
+                                                                             tmp_path):
+    designs = np.r_[0:20, 30:40]
+    card = train_sweep([sweep_data], "nn", tmp_path / "sub", n_modes=8, options=dict(OPTIONS),
+                       designs=designs)
+    training = card["training"]
+    assert training["rows"] + training["held_out"] == designs.size
+    assert training["design_subset"]["ranges"] == [[0, 20], [30, 40]]
+    assert training["design_subset"]["of"] == 48
+    for bad in ([0, 0, 1], [47, 48], []):
+        with pytest.raises(FieldError, match="designs: need distinct integer row positions"
+                           ) as err:
+            train_sweep([sweep_data], "nn", tmp_path / "bad", options=dict(OPTIONS),
+                        designs=bad)
+        assert err.value.field == "designs"
+    assert not (tmp_path / "bad").exists()
+
+
+def test_band_disagreement_is_the_raw_log_std_of_centre_and_edge_over_the_band(sweep_data,
+                                                                              sweep_model):
+    from surrogate.refine import band_disagreement
+
+    data = load_sweep_datasets([sweep_data])
+    p = load_predictor(sweep_model[0], calibrated=False)
+    got = band_disagreement(p, data.codes[:5], data.band_hz, chunk=2)
+    pred = p.predict(np.column_stack([np.repeat(data.codes[:5], BAND_HZ.size, axis=0),
+                                      np.tile(data.band_hz, 5)]))
+    want = 0.5 * (pred["center_amplitude_um_log_std"] + pred["edge_amplitude_um_log_std"])
+    np.testing.assert_allclose(got, want.reshape(5, -1).mean(axis=1), rtol=1e-12)
+    assert np.all(got > 0)
