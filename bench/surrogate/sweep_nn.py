@@ -30,6 +30,8 @@ from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor, make_session
 from surrogate.sweep.export import export_sweep_nn
 from surrogate.sweep.nn import fit_sweep, split_nn_options
+from surrogate.sweep.scoring import predict_pairs
+from surrogate.sweep.scoring import score_pairs as score
 from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import _calibration_rows, split
 
@@ -49,38 +51,7 @@ def graph_predict(onnx: bytes, data: SweepData, codes: np.ndarray) -> dict[str, 
 def baseline_predict(path: str, data: SweepData, codes: np.ndarray) -> dict[str, np.ndarray]:
     """A model directory's outputs at the pairs (through the run-time predictor), its profile
     on its own grid."""
-    p = load_predictor(path)
-    inputs = {s.name: (codes[:, j] if s.type != "categorical"
-                       else np.asarray(s.choices)[codes[:, j].astype(int)])
-              for j, s in enumerate(data.all_specs)}
-    out = p.predict({name: inputs[name] for name in p.input_names}, extrapolate=True)
-    out["grid_mm"] = p.profile_distance_mm
-    return out
-
-
-def score(pred: dict[str, np.ndarray], centre: np.ndarray, profile: np.ndarray,
-          grid_mm: np.ndarray) -> dict[str, Any]:
-    field = np.maximum(centre, profile[:, 0])
-    out: dict[str, Any] = {}
-    for name, y in (("centre", centre), ("edge", profile[:, 0])):
-        p = pred[f"{'center' if name == 'centre' else 'edge'}_amplitude_um"]
-        rel = np.abs(p / y - 1.0)
-        out[name] = [float(np.median(rel)), *np.percentile(rel, [95, 99]).tolist(),
-                     float(rel.max()), float(np.max(np.abs(p - y) / field))]
-        key = f"{'center' if name == 'centre' else 'edge'}_amplitude_um_log_std"
-        if key in pred:  # coverage of the model's 95 % interval
-            z = np.abs(np.log(y) - np.log(p)) / np.maximum(pred[key], 1e-300)
-            out[f"{name}_coverage95"] = float(np.mean(z <= 1.959964))
-    pg = pred.get("grid_mm", grid_mm)
-    near = [j for j, d in enumerate(grid_mm) if d <= 20.0 + 1e-9 and np.isclose(pg, d).any()]
-    cols = [int(np.argmin(np.abs(pg - grid_mm[j]))) for j in near]
-    same_grid = pg.shape == grid_mm.shape and np.allclose(pg, grid_mm)
-    for label, truth, got in (("profile_0_20mm", profile[:, near], pred["profile_um"][:, cols]),
-                              *((("profile_all", profile, pred["profile_um"]),)
-                                if same_grid else ())):
-        l2 = np.linalg.norm(got - truth, axis=1) / np.linalg.norm(truth, axis=1)
-        out[label] = [float(np.median(l2)), float(np.percentile(l2, 95))]
-    return out
+    return predict_pairs(load_predictor(path), data, codes)
 
 
 def line(name: str, s: dict[str, Any]) -> str:

@@ -8,6 +8,10 @@ graph and the run-time encoder and scored as the held-out split is
 largest error on the field's scale, profile relative L2 over the whole grid, 95 % coverage).
 The entry records each test dataset's manifest digest, space hash, Sobol seed and size, so the
 card says which designs it was scored on.
+
+The benches and the accuracy study score any model the same way at the same pairs with
+:func:`predict_pairs` (a run-time predictor, its profile on its own grid) and
+:func:`score_pairs` (``bench/surrogate/sweep_nn.py``, ``hapticrom bench accuracy``).
 """
 
 from __future__ import annotations
@@ -20,9 +24,10 @@ import numpy as np
 
 from fieldspec import FieldError
 from surrogate.data.store import Store
+from surrogate.runtime.predictor import Predictor
 from surrogate.sweep.targets import SweepData, load_sweep_datasets
 
-__all__ = ["load_test_data", "score_test_set"]
+__all__ = ["load_test_data", "predict_pairs", "score_pairs", "score_test_set"]
 
 
 def _seed(path: str | Path) -> int:
@@ -60,3 +65,54 @@ def score_test_set(test: SweepData, score: Callable[[SweepData, np.ndarray], dic
                      | {"seed": _seed(s["path"])} for s in test.sources],
             "designs": n, "pairs": int(n * test.band_hz.size),
             "metrics": score(test, np.arange(n))}
+
+
+def predict_pairs(predictor: Predictor, data: SweepData, codes: np.ndarray
+                  ) -> dict[str, np.ndarray]:
+    """A run-time predictor's outputs at (design, frequency) ``codes`` (columns: the inputs of
+    ``data``, frequency last; :func:`surrogate.sweep.targets.pair_rows`), given as a dict of
+    named inputs (categorical ones by their choice) with ``extrapolate=True``; its profile
+    grid under ``grid_mm`` (a single-frequency model's is its own, e.g. 0-20 mm)."""
+    inputs = {s.name: (codes[:, j] if s.type != "categorical"
+                       else np.asarray(s.choices)[codes[:, j].astype(int)])
+              for j, s in enumerate(data.all_specs)}
+    out = predictor.predict({name: inputs[name] for name in predictor.input_names},
+                            extrapolate=True)
+    out["grid_mm"] = predictor.profile_distance_mm
+    return out
+
+
+def score_pairs(pred: dict[str, np.ndarray], centre: np.ndarray, profile: np.ndarray,
+                grid_mm: np.ndarray) -> dict[str, Any]:
+    """Errors of ``pred`` (``center_amplitude_um``, ``edge_amplitude_um`` (pairs,) and
+    ``profile_um`` (pairs, m) [um], optional ``*_log_std`` and ``grid_mm``, the prediction's
+    profile grid, default ``grid_mm``) against the FE ``centre`` (pairs,) and ``profile``
+    (pairs, n_p) on ``grid_mm`` (the edge is its first point), over every pair.
+
+    ``centre`` and ``edge``: [median, p95, p99, max] relative error and the largest error on
+    the field's scale max |error| / max(FE centre, FE edge); ``centre_coverage95`` and
+    ``edge_coverage95`` when the prediction has a log-std (share of pairs inside
+    exp(mu +- 1.96 sigma)); the profile's relative L2 error [median, p95] over 0-20 mm
+    (``profile_0_20mm``, the grid points the prediction's grid shares) and, when the grids
+    are the same, over the whole grid (``profile_all``)."""
+    field = np.maximum(centre, profile[:, 0])
+    out: dict[str, Any] = {}
+    for name, y in (("centre", centre), ("edge", profile[:, 0])):
+        p = pred[f"{'center' if name == 'centre' else 'edge'}_amplitude_um"]
+        rel = np.abs(p / y - 1.0)
+        out[name] = [float(np.median(rel)), *np.percentile(rel, [95, 99]).tolist(),
+                     float(rel.max()), float(np.max(np.abs(p - y) / field))]
+        key = f"{'center' if name == 'centre' else 'edge'}_amplitude_um_log_std"
+        if key in pred:  # coverage of the model's 95 % interval
+            z = np.abs(np.log(y) - np.log(p)) / np.maximum(pred[key], 1e-300)
+            out[f"{name}_coverage95"] = float(np.mean(z <= 1.959964))
+    pg = pred.get("grid_mm", grid_mm)
+    near = [j for j, d in enumerate(grid_mm) if d <= 20.0 + 1e-9 and np.isclose(pg, d).any()]
+    cols = [int(np.argmin(np.abs(pg - grid_mm[j]))) for j in near]
+    same_grid = pg.shape == grid_mm.shape and np.allclose(pg, grid_mm)
+    for label, truth, got in (("profile_0_20mm", profile[:, near], pred["profile_um"][:, cols]),
+                              *((("profile_all", profile, pred["profile_um"]),)
+                                if same_grid else ())):
+        l2 = np.linalg.norm(got - truth, axis=1) / np.linalg.norm(truth, axis=1)
+        out[label] = [float(np.median(l2)), float(np.percentile(l2, 95))]
+    return out

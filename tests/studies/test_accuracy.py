@@ -1,7 +1,9 @@
 """`hapticrom bench accuracy` (studies.accuracy): the quick run writes a complete report and
 plot whose numbers are finite and consistent (finer mesh -> smaller error, ONNX = in-memory
-model, the default mesh equals the level-1 quadratic ladder row), bad arguments exit 2 without
-writing, and the metric and curve helpers are exact on analytic inputs.
+model, the default mesh equals the level-1 quadratic ladder row; the whole-band section scores the
+shipped sweep models, nn-default and the MLP peer), bad arguments exit 2 without writing, and the
+metric and curve helpers are exact on analytic inputs; the whole-band section runs end to end on
+the synthetic sweep fixture.
 
 The tests on the quick run's result are the study itself, run CI-sized (43 s on a quiet
 2-core machine, the slowest of the fast tier): they are in the slow tier (``make test-slow``);
@@ -14,14 +16,15 @@ import numpy as np
 import pytest
 
 from hapticrom.cli import main
-from studies.accuracy import run_study
+from studies.accuracy import band_models, report, run_study
 from studies.accuracy.designs import load_study_data, pick_designs
 from studies.accuracy.learning_curves import samples_for
 from studies.accuracy.metric import Answer, errors, summary
 from studies.accuracy.report import fastest_within, pareto, render
 
 SECTIONS = ("## Findings", "## Error metric", "## Designs", "## Every way to get an answer",
-            "## Cost of the model: learning curves", "## Effects audit", "## Machine")
+            "### The whole band, on fresh designs", "## Cost of the model: learning curves",
+            "## Effects audit", "## Machine")
 
 
 @pytest.fixture(scope="module")
@@ -95,9 +98,45 @@ def test_quick_study_numbers_are_finite_and_consistent(result):
     for r in (*result["gp_curve"], *result["nn_curve"]):
         assert r["total_s"] == pytest.approx(r["generation_s"] + r["train_s"])
         assert 0 < r["worst_median"] <= r["worst_p95"]
+    band = result["band"]  # the shipped sweep models, nn-default and the MLP peer, CI-sized
+    assert [r["role"] for r in band["rows"]] == ["harmonic", "gaussian_process",
+                                                 "single frequency", "peer"]
+    assert band["n_test"] == band_models.N_TEST_QUICK
+    assert band["rows"][-1]["fitted"] == band_models.N_TRAIN_QUICK
+    for r in band["rows"]:
+        assert r["seconds_1"] > 0 and r["seconds_batch"] > 0
+        assert all(math.isfinite(v) for v in (*r["centre"], *r["edge"], r["max_field"],
+                                              r["profile_median"]))
+    assert band["rows"][2]["profile_grid"] == "0-20 mm"  # nn-default's own profile
     eff = {r["variant"]: r for r in result["effects"]}
     assert eff["all effects"]["worst_max"] == 0.0
     assert sum(eff["no encapsulation"][k] for k in ("applies", "not_present", "refused")) == 3
+
+
+def test_band_section_on_the_synthetic_sweeps(sweep_dataset, sweep_model, tmp_path):
+    from sweep_fixture import make_dataset
+
+    test = make_dataset(tmp_path / "test", 6, seed=777)
+    band = band_models.band_rows(None, None, train=sweep_dataset, test=test,
+                                 models=[("harmonic", sweep_model)], repeat=1)
+    model, peer = band["rows"]
+    assert model["role"] == "harmonic" and peer["role"] == "peer"
+    # the peer fits on every design the model's card records; every test design is scored
+    assert band["n_train"] == band["recorded_train"] == peer["fitted"] == 48
+    assert band["n_test"] == band["n_test_all"] == peer["batch"] == 6
+    for r in (model, peer):
+        assert r["profile_grid"] == "0-40 mm" and r["seconds_1"] > 0 and r["seconds_batch"] > 0
+        assert 0 <= r["centre"][0] <= r["centre"][1] <= r["centre"][2] <= r["centre"][3]
+        assert math.isfinite(r["max_field"]) and math.isfinite(r["profile_median"])
+    assert model["coverage"][0] is not None and peer["coverage"] == [None, None]
+    assert band["fe"] is None  # the synthetic set records no solver time
+    assert band_models.lead(model, peer)["centre"] == pytest.approx(
+        peer["centre"][1] / model["centre"][1])
+    assert set(band_models.meets(model)) == set(band_models.TARGETS)
+    res = {"band": band}
+    assert "- Shipped harmonic model" in "\n".join(report._band_findings(res))
+    table = "\n".join(report._band_section(res))
+    assert "not recorded" in table and "nan" not in table
 
 
 @pytest.mark.slow
@@ -109,6 +148,11 @@ def test_report_structure(result):
     assert "nan" not in text.replace("n/a", "")
     table = [ln for ln in text.splitlines() if ln.startswith("| FE order")]
     assert len(table) == 4
+    band = text[text.index("### The whole band"):text.index("## Cost of the model")]
+    for name in ("| FE sweep", "| nn-sweep (harmonic)", "| gp-sweep (gaussian_process)",
+                 "| nn-default (single frequency)", "| scikit-learn MLP"):
+        assert name in band
+    assert "- Shipped harmonic model `nn-sweep`" in text and "peers.md" in band
 
 
 @pytest.mark.slow
