@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from error_model import error_check, fit_surrogate_error, fit_sweep_error
+from error_model import SWEEP_DESIGNS_FILE, error_check, fit_surrogate_error, fit_sweep_error
 
 from calibration import calibrate, surrogate_std_factor
 from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
@@ -260,8 +260,15 @@ def main() -> None:
     ap.add_argument("--sweep", type=Path,
                     help="with --sweep-error: a dataset of datasets/spaces/default-sweep.toml "
                     "(hapticrom generate --space datasets/spaces/default-sweep.toml --n 8192 "
-                    "--out DIR) holding the designs of "
-                    "bench/calibration/data/sweep-error-designs.txt")
+                    "--out DIR) holding the designs of --sweep-designs; not one the model "
+                    "trained on (refused)")
+    ap.add_argument("--sweep-designs", default=str(SWEEP_DESIGNS_FILE), metavar="FILE|all",
+                    help="with --sweep-error: the designs of --sweep to use, a file of "
+                    "sample_index values (default: the 1,600 the error model was measured on) or "
+                    "'all' (e.g. datasets/default-sweep-test for a model trained on sweeps)")
+    ap.add_argument("--sweep-max-mm", type=float, default=None,
+                    help="with --sweep-error: only the profile points up to this distance from "
+                    "the edge [mm] (default: to the end of the model's profile)")
     ap.add_argument("--error-check", action="store_true",
                     help="only check the surrogate's error at the true inputs of the study's "
                     "measurements against the error model (probability integral transform)")
@@ -304,7 +311,9 @@ def main() -> None:
                      "datasets/spaces/default-sweep.toml")
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
-            print("\n".join(fit_sweep_error(predictor, s, args.sweep)), flush=True)
+            designs = None if args.sweep_designs == "all" else Path(args.sweep_designs)
+            print("\n".join(fit_sweep_error(predictor, s, args.sweep, designs,
+                                             args.sweep_max_mm)), flush=True)
         return
     if args.surrogate_error:
         for s, predictor in predictors.items():

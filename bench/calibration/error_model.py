@@ -133,7 +133,9 @@ def _pit_blocks(fwd: ForwardModel, sd: np.ndarray, e: np.ndarray, version: str, 
     from calibration.fit import error_settings
 
     t_model = version == "t"
-    errors = {g.output: error_settings(g.output, t_model, k) for g in fwd.groups}
+    errors = {g.output: error_settings(g.output, t_model, k,
+                                       model=fwd.predictor.card.get("name"))
+              for g in fwd.groups}
     if version == "t, previous":
         for o, e_ in errors.items():
             if o in PREVIOUS_T:
@@ -215,28 +217,52 @@ def sweep_design_indices(path: Path = SWEEP_DESIGNS_FILE) -> np.ndarray:
     return np.array([int(ln) for ln in lines], dtype=np.int64)
 
 
-def sweep_residuals(predictor, path: Path
+def is_sweep_model(predictor) -> bool:
+    """Whether ``predictor`` was trained on a sweep dataset (its card's split is by design)."""
+    return predictor.card.get("training", {}).get("split") == "by design"
+
+
+def trained_on(predictor, path: Path) -> bool:
+    """Whether ``predictor``'s card names the dataset ``path`` among its training data."""
+    here = Path(path).resolve()
+    return any((ROOT / d["path"]).resolve() == here
+               for d in predictor.card.get("training_data", []) if "path" in d)
+
+
+def sweep_residuals(predictor, path: Path, designs: Path | None = SWEEP_DESIGNS_FILE,
+                    max_mm: float | None = None
                     ) -> tuple[np.ndarray, np.ndarray, dict[str, tuple[np.ndarray, np.ndarray]]]:
     """The surrogate's error on the sweep dataset at the frequencies of a 10 Hz grid and the
-    profile points it shares with the model (every 2 mm, 0-20 mm from the edge): (frequencies
-    [Hz], distances [mm], per output read {name: (ln(FE / surrogate), raw predictive log-std),
-    each (designs, frequencies[, points])}); magnitude |U| and normal component |U_z|."""
+    profile points it shares with the model (every 2 mm, to the end of the model's profile:
+    20 mm for nn-default, 40 mm for a sweep model): (frequencies [Hz], distances [mm], per
+    output read {name: (ln(FE / surrogate), raw predictive log-std), each (designs,
+    frequencies[, points])}); magnitude |U| and normal component |U_z|; ``max_mm`` ends the
+    profile sooner. ``designs``: the file
+    of ``sample_index`` values to use, or None for every design of the dataset. A model whose
+    card names ``path`` as its training data is refused: its errors there are not a new
+    design's."""
     from surrogate.data.store import Store
 
+    if trained_on(predictor, path):
+        raise ValueError(f"--sweep {path}: the model {predictor.card.get('name')!r} trained on "
+                         "this dataset; measure its error on designs it never saw (e.g. "
+                         "datasets/default-sweep-test with --sweep-designs all)")
     df = Store.open(path).read()
-    want = sweep_design_indices()
-    df = df[(df["status"] == "ok") & df["sample_index"].isin(want)]
+    df = df[df["status"] == "ok"]
+    if designs is not None:
+        want = sweep_design_indices(designs)
+        df = df[df["sample_index"].isin(want)]
+        if len(df) < want.size:
+            raise ValueError(f"--sweep {path}: holds {len(df)} of the {want.size} designs of "
+                             f"{designs.name}; extend it with `hapticrom generate --space "
+                             "datasets/spaces/default-sweep.toml --n 8192 --out DIR`")
     df = df.sort_values("sample_index", kind="stable").reset_index(drop=True)
-    if len(df) < want.size:
-        raise ValueError(f"--sweep {path}: holds {len(df)} of the {want.size} designs of "
-                         f"{SWEEP_DESIGNS_FILE.name}; extend it with `hapticrom generate --space "
-                         "datasets/spaces/default-sweep.toml --n 8192 --out DIR`")
     n = len(df)
     freq = np.asarray(df["sweep_frequency_hz"].iloc[0], dtype=float)
     keep = np.flatnonzero(np.isclose(np.mod(freq, SWEEP_STEP_HZ), 0.0))
     dist = np.asarray(df["profile_distance_mm"].iloc[0], dtype=float)
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
-    pk = np.flatnonzero(dist <= grid[-1])
+    pk = np.flatnonzero(dist <= min(grid[-1], np.inf if max_mm is None else max_mm))
     gi = np.array([int(np.argmin(np.abs(grid - d))) for d in dist[pk]])
     if not np.allclose(grid[gi], dist[pk]):
         raise ValueError("the sweep's profile points are not on the model's grid")
@@ -329,24 +355,72 @@ def fit_t_per_frequency(x: np.ndarray, corr: np.ndarray) -> tuple[float, np.ndar
     return float(np.exp(t.x[0])), np.exp(t.x[1:])
 
 
-def fit_sweep_error(predictor, component: str, path: Path) -> list[str]:
+def current_t_check(x: np.ndarray, f: np.ndarray, dist: np.ndarray, name: str,
+                    nu: float, c: np.ndarray, length: float | None,
+                    t: dict[str, Any], label: str) -> str:
+    """How the Student-t ``t`` (an entry of :data:`calibration.fit.SURROGATE_ERROR_T`, called
+    ``label``) of ``name`` describes the errors ``x`` (designs, frequencies, points; in units
+    of the raw log-std), one frequency at a time: the mean log-likelihood per (design,
+    frequency) vector under it and under the refit (nu, scales ``c``, Matern length
+    ``length``), and the quartile fractions of the probability integral transform
+    F(delta / m; m, nu) under ``t`` (0.25 each if it describes them; the upper quarters crowd
+    when it is too narrow)."""
+    from scipy import stats
+
+    from calibration.fit import SCALE_HZ
+    from calibration.likelihood import mvt_logpdf, profile_kernel
+
+    lag = np.abs(dist[:, None] - dist[None, :])
+    m = x.shape[2]
+    Kc = np.ones((1, 1)) if m == 1 else profile_kernel(lag, t["length_mm"], "matern32")
+    Kn = np.ones((1, 1)) if m == 1 else profile_kernel(lag, float(length), "matern32")
+    cc = np.interp(f, SCALE_HZ, t["scale"])
+    ll_cur = ll_new = 0.0
+    pit = []
+    for i in range(f.size):
+        ll_cur += float(np.sum(mvt_logpdf(x[:, i], cc[i] ** 2 * Kc, t["nu"])))
+        ll_new += float(np.sum(mvt_logpdf(x[:, i], c[i] ** 2 * Kn, nu)))
+        xi = x[:, i] / cc[i]
+        delta = np.einsum("ij,ij->i", xi, np.linalg.solve(Kc, xi.T).T)
+        pit.append(stats.f.cdf(delta / m, m, t["nu"]))
+    n = x.shape[0] * f.size
+    q = np.histogram(np.concatenate(pit), bins=[0, 0.25, 0.5, 0.75, 1.0])[0] / n
+    return (f"    against {label} (nu {t['nu']:g}, scale "
+            + " / ".join(f"{a:.3g}" for a in np.interp([100, 150, 200, 250], SCALE_HZ,
+                                                         t["scale"]))
+            + " at 100 / 150 / 200 / 250 Hz"
+            + ("" if m == 1 else f", length {t['length_mm']:g} mm") + "): log-lik per vector "
+            f"{ll_cur / n:.3f} (refit {ll_new / n:.3f}); PIT quartile fractions under it "
+            + " ".join(f"{v:.2f}" for v in q) + "; refit scale / current at 100 / 150 / 200 / "
+            "250 Hz " + " / ".join(f"{a:.2f}" for a in np.interp([100, 150, 200, 250], f, c)
+                                   / np.interp([100, 150, 200, 250], SCALE_HZ, t["scale"])))
+
+
+def fit_sweep_error(predictor, component: str, path: Path,
+                    designs: Path | None = SWEEP_DESIGNS_FILE,
+                    max_mm: float | None = None) -> list[str]:
     """The surrogate's error structure across frequency, per output a ``component`` sensor
     reads (calibration.fit.SURROGATE_ERROR_T): the correlation length along the profile
-    (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid); on the sweep
-    dataset, nu and a scale per frequency (the profile's length fixed), then for each frequency
-    difference df of one design: the correlation rho of its errors under one shared mixing
-    variable lam, and that model's log-likelihood per pair of frequencies against independent
-    lams (no correlation): lam is shared where it wins. The frequency length is the Gaussian
-    kernel exp(-df^2 / (2 L_f^2)) fitted to rho at those df."""
+    (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid; for a model
+    trained on sweeps, on the sweep dataset's own vectors, every 2 mm to the end of its
+    profile, or to ``max_mm``); on the sweep dataset, nu and a scale per frequency (the
+    profile's length fixed), then for each frequency difference df of one design: the
+    correlation rho of its errors under one shared mixing variable lam, and that model's log-
+    likelihood per pair of frequencies against independent lams (no correlation): lam is shared
+    where it wins. The frequency length is the Gaussian kernel exp(-df^2 / (2 L_f^2)) fitted to
+    rho at those df. Last, per output, how SURROGATE_ERROR_T and the model's own entry of
+    SURROGATE_ERROR_T_BY_MODEL, if any, fit the same errors (:func:`current_t_check`)."""
     from scipy.optimize import minimize_scalar
 
+    from calibration.fit import SURROGATE_ERROR_T, SURROGATE_ERROR_T_BY_MODEL
     from calibration.likelihood import mvt_logpdf, profile_kernel
 
     outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
                ("profile_normal_um",))
-    held = held_out_residuals(predictor.uncalibrated())
+    sweep_model = is_sweep_model(predictor)
+    held = None if sweep_model else held_out_residuals(predictor.uncalibrated())
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
-    f, dist, sweep = sweep_residuals(predictor, path)
+    f, dist, sweep = sweep_residuals(predictor, path, designs, max_mm)
     lines = [f"  sweep dataset {path}: {next(iter(sweep.values()))[0].shape[0]} designs x "
              f"{f.size} frequencies ({f[0]:g}-{f[-1]:g} Hz every {SWEEP_STEP_HZ:g}), profile "
              f"points {dist[0]:g}-{dist[-1]:g} mm every {dist[1] - dist[0]:g} mm"]
@@ -358,11 +432,15 @@ def fit_sweep_error(predictor, component: str, path: Path) -> list[str]:
             K, length = np.ones((1, 1)), None
             lines.append(f"  {name}: held-out rows: the face (one point)")
         else:
-            hr = held[name]
-            fits = fit_matern_profile(*hr, grid, ERROR_LENGTH_MM[name])
+            if sweep_model:  # no single-frequency held-out rows: the sweep's own vectors
+                hr = (r.reshape(-1, r.shape[2]), sd.reshape(-1, sd.shape[2]))
+                where, pts = "sweep vectors (design, frequency)", dist
+            else:
+                hr, where, pts = held[name], "held-out rows", grid
+            fits = fit_matern_profile(*hr, pts, ERROR_LENGTH_MM[name])
             length = round(fits["matern32"]["length_mm"], 1)
             K = profile_kernel(np.abs(dist[:, None] - dist[None, :]), length, "matern32")
-            lines.append(f"  {name}: {hr[0].shape[0]} held-out rows x {grid.size} points: "
+            lines.append(f"  {name}: {hr[0].shape[0]} {where} x {pts.size} points: "
                          + "; ".join(f"{k} nu {v['nu']:.3g} scale {v['scale']:.3g} length "
                                      f"{v['length_mm']:.3g} mm log-lik {v['loglik']:.1f} "
                                      "(scale on every 2nd / 4th point: "
@@ -398,4 +476,11 @@ def fit_sweep_error(predictor, component: str, path: Path) -> list[str]:
         lines.append(f"    -> lam shared within {shared_hz:g} Hz, frequency length (Gaussian) "
                      f"{lf:.1f} Hz" + ("" if length is None else
                                        f", profile length (Matern 3/2) {length:g} mm"))
+        model = predictor.card.get("name")
+        checks = {"SURROGATE_ERROR_T": SURROGATE_ERROR_T[name]}
+        own = SURROGATE_ERROR_T_BY_MODEL.get(model, {}).get(name)
+        if own is not None:
+            checks[f"SURROGATE_ERROR_T_BY_MODEL[{model!r}]"] = own
+        lines += [current_t_check(x, f, dist, name, nu, c, length, t, f"{label}[{name!r}]")
+                  for label, t in checks.items()]
     return lines

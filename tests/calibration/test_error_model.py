@@ -12,7 +12,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from calibration.fit import SCALE_HZ, SURROGATE_ERROR_T, error_settings, point_scales
+from calibration.fit import (
+    SCALE_HZ,
+    SURROGATE_ERROR_T,
+    SURROGATE_ERROR_T_BY_MODEL,
+    calibrate,
+    error_settings,
+    point_scales,
+    surrogate_error_t,
+)
 from calibration.forward import ForwardModel
 from calibration.likelihood import (
     frequency_clusters,
@@ -83,6 +91,39 @@ def test_error_correlation_and_blocks_follow_the_clusters():
     g = error_settings("profile_um", False, 1.5)  # the Gaussian: one factor, one block
     assert g["nu"] is None and g["shared_within_hz"] is None
     assert np.all(point_scales(fwd, {"profile_um": g}, 1.5) == 1.5)
+
+
+def test_a_model_measured_on_its_own_gets_its_own_t():
+    """nn-sweep's t (measured on it, SURROGATE_ERROR_T_BY_MODEL) for nn-sweep; every other
+    model, and an output it does not list, the t of SURROGATE_ERROR_T."""
+    own = SURROGATE_ERROR_T_BY_MODEL["nn-sweep"]
+    for o in ("center_amplitude_um", "profile_um"):
+        assert surrogate_error_t(o, "nn-sweep") is own[o]
+        assert surrogate_error_t(o, "nn-default") is SURROGATE_ERROR_T[o]
+        assert surrogate_error_t(o) is SURROGATE_ERROR_T[o]
+        assert len(own[o]["scale"]) == len(SCALE_HZ)
+    assert surrogate_error_t("profile_normal_um", "nn-sweep") is SURROGATE_ERROR_T[
+        "profile_normal_um"]
+    e = error_settings("profile_um", True, 1.0, model="nn-sweep")
+    assert e["nu"] == own["profile_um"]["nu"] and e["length_mm"] == own["profile_um"]["length_mm"]
+    assert e["scale"] == tuple(own["profile_um"]["scale"])
+    assert error_settings("profile_um", False, 1.5, model="nn-sweep")["nu"] is None
+
+
+def test_calibrate_applies_the_t_of_the_model_by_its_name():
+    """The fit picks the t by the card's name: the same predictor renamed nn-sweep gets
+    nn-sweep's t (a short chain; the error model, not the posterior, is checked)."""
+    p = load_predictor("models/nn-default")
+    m = measurement_from_rows([_row("edge", 2, 150), _row("edge", 6, 150)], design=DESIGN)
+    fit = ["skin_E_kPa"]
+    fixed = {"fat_thickness_mm": 10.0, "tissue_loss_factor": 0.2}
+    a = calibrate(p, m, fit, fixed=fixed, walkers=8, steps=20, burn=10, n_init=64)
+    assert a.error_model["profile_um"]["nu"] == SURROGATE_ERROR_T["profile_um"]["nu"]
+    p.card = {**p.card, "name": "nn-sweep"}
+    b = calibrate(p, m, fit, fixed=fixed, walkers=8, steps=20, burn=10, n_init=64)
+    want = SURROGATE_ERROR_T_BY_MODEL["nn-sweep"]["profile_um"]
+    assert b.error_model["profile_um"]["nu"] == want["nu"]
+    assert b.error_model["profile_um"]["length_mm"] == want["length_mm"]
 
 
 def test_scale_between_grid_frequencies_is_interpolated():
