@@ -319,10 +319,10 @@ def _band_findings(res: dict[str, Any]) -> list[str]:
         out.append(
             f"- Shipped {r['role']} model `{r['model']}` on {band['n_test']} fresh designs x "
             f"{band['band_hz'][2]} band frequencies: "
-            + ", ".join(f"{k} {_pct(v)} (target < {_pct(TARGETS[k])}: "
+            + ", ".join(f"{k} {100 * v:.3g} % (target < {100 * TARGETS[k]:g} %: "
                         f"{'met' if ok else 'not met'})" for k, (v, ok) in m.items())
             + f": **it {verdict}**. Its p95 lead over the MLP peer trained on "
-            f"{peer['fitted']} designs: {ld['centre']:.2f}x centre, {ld['edge']:.2f}x edge "
+            f"{peer['fitted']:,} designs: {ld['centre']:.2f}x centre, {ld['edge']:.2f}x edge "
             f"(target {LEAD:g}x: {'met' if min(ld.values()) >= LEAD else 'not met'}). "
             f"One design's whole band in {_t(r['seconds_1'])} (one design per call), "
             f"{_t(r['seconds_batch'])} per design batched"
