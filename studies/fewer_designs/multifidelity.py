@@ -33,6 +33,7 @@ from surrogate.runtime.encoding import InputSpec, encode
 from surrogate.runtime.predictor import load_predictor
 from surrogate.sweep.export import member_targets
 from surrogate.sweep.nn import fit_sweep
+from surrogate.sweep.scoring import named_inputs
 from surrogate.sweep.targets import load_sweep_datasets, log_magnitudes
 from surrogate.train import split
 
@@ -54,9 +55,7 @@ def _inputs(predictor: Any, codes: np.ndarray, specs: Sequence[InputSpec],
             frequency_hz: float) -> dict[str, np.ndarray]:
     """The predictor's named inputs of design ``codes`` at one frequency (categoricals by
     their choice names)."""
-    by_name = {s.name: (codes[:, j] if s.type != "categorical"
-                        else np.asarray(s.choices)[codes[:, j].astype(int)])
-               for j, s in enumerate(specs)}
+    by_name = named_inputs(codes, specs)
     by_name["frequency_hz"] = np.full(len(codes), float(frequency_hz))
     missing = [n for n in predictor.input_names if n not in by_name]
     if missing:
@@ -64,31 +63,31 @@ def _inputs(predictor: Any, codes: np.ndarray, specs: Sequence[InputSpec],
     return {n: by_name[n] for n in predictor.input_names}
 
 
+def _at_frequencies(model: str | Path, codes: np.ndarray, specs: Sequence[InputSpec],
+                    freqs_hz: Sequence[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The model's centre and edge amplitude [um] of design ``codes`` at each of ``freqs_hz``
+    and whether each (design, frequency) lies outside its trained range, each (n, n_f)."""
+    predictor = load_predictor(model)
+    outs = [predictor.predict(_inputs(predictor, codes, specs, f), extrapolate=True)
+            for f in freqs_hz]
+    return tuple(np.column_stack([o[key] for o in outs])  # type: ignore[return-value]
+                 for key in ("center_amplitude_um", "edge_amplitude_um", "extrapolated"))
+
+
 def low_features(model: str | Path, codes: np.ndarray, specs: Sequence[InputSpec],
                  freqs_hz: Sequence[float]) -> tuple[np.ndarray, float]:
     """(features (n, 2 * len(freqs_hz)): the model's ln centre, then ln edge amplitude [ln um]
     at each frequency; the share of (design, frequency) rows outside its trained range)."""
-    predictor = load_predictor(model)
-    cols, outside = [], []
-    for f in freqs_hz:
-        out = predictor.predict(_inputs(predictor, codes, specs, f), extrapolate=True)
-        cols.append((np.log(out["center_amplitude_um"]), np.log(out["edge_amplitude_um"])))
-        outside.append(out["extrapolated"])
-    feats = np.column_stack([c for c, _ in cols] + [e for _, e in cols])
-    return feats, float(np.mean(outside))
+    centre, edge, outside = _at_frequencies(model, codes, specs, freqs_hz)
+    return np.column_stack([np.log(centre), np.log(edge)]), float(np.mean(outside))
 
 
 def low_answers(model: str | Path, codes: np.ndarray, specs: Sequence[InputSpec],
                 band_hz: np.ndarray) -> representations.Answers:
     """The low-fidelity model's own centre and edge magnitudes at every band frequency (its
     profile ends elsewhere, so none)."""
-    predictor = load_predictor(model)
-    c, e = [], []
-    for f in band_hz:
-        out = predictor.predict(_inputs(predictor, codes, specs, f), extrapolate=True)
-        c.append(out["center_amplitude_um"])
-        e.append(out["edge_amplitude_um"])
-    return representations.Answers(np.column_stack(c), np.column_stack(e), None)
+    centre, edge, _ = _at_frequencies(model, codes, specs, band_hz)
+    return representations.Answers(centre, edge, None)
 
 
 def overlap(model: str | Path, test_codes: np.ndarray, specs: Sequence[InputSpec]

@@ -27,7 +27,7 @@ from surrogate.data.store import Store
 from surrogate.runtime.predictor import Predictor
 from surrogate.sweep.targets import SweepData, load_sweep_datasets
 
-__all__ = ["load_test_data", "predict_pairs", "score_pairs", "score_test_set"]
+__all__ = ["load_test_data", "named_inputs", "predict_pairs", "score_pairs", "score_test_set"]
 
 
 def _seed(path: str | Path) -> int:
@@ -67,15 +67,21 @@ def score_test_set(test: SweepData, score: Callable[[SweepData, np.ndarray], dic
             "metrics": score(test, np.arange(n))}
 
 
+def named_inputs(codes: np.ndarray, specs: Sequence[Any]) -> dict[str, np.ndarray]:
+    """The columns of ``codes`` (n, len(specs)) by input name, categorical ones by their choice
+    names: what a run-time predictor takes as a dict."""
+    return {s.name: (codes[:, j] if s.type != "categorical"
+                     else np.asarray(s.choices)[codes[:, j].astype(int)])
+            for j, s in enumerate(specs)}
+
+
 def predict_pairs(predictor: Predictor, data: SweepData, codes: np.ndarray
                   ) -> dict[str, np.ndarray]:
     """A run-time predictor's outputs at (design, frequency) ``codes`` (columns: the inputs of
     ``data``, frequency last; :func:`surrogate.sweep.targets.pair_rows`), given as a dict of
     named inputs (categorical ones by their choice) with ``extrapolate=True``; its profile
     grid under ``grid_mm`` (a single-frequency model's is its own, e.g. 0-20 mm)."""
-    inputs = {s.name: (codes[:, j] if s.type != "categorical"
-                       else np.asarray(s.choices)[codes[:, j].astype(int)])
-              for j, s in enumerate(data.all_specs)}
+    inputs = named_inputs(codes, data.all_specs)
     out = predictor.predict({name: inputs[name] for name in predictor.input_names},
                             extrapolate=True)
     out["grid_mm"] = predictor.profile_distance_mm
