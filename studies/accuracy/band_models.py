@@ -16,8 +16,9 @@ no model saw them), in design order: all of them, or the first :data:`N_TEST_QUI
   ``mlp`` learner on its complex-band representation, :data:`MODES` + :data:`PROFILE_MODES`
   POD modes), fitted here on the training designs the shipped network's card records (its
   ``training_data`` rows of ``datasets/default-sweep``: the first that many designs in Sobol
-  order; ``--quick``: the first :data:`N_TRAIN_QUICK`). The shipped models fit on 90 % of
-  those designs (the rest held out for their cards and interval calibration); the peer on all.
+  order; ``--quick``: the first :data:`N_TRAIN_QUICK`). The shipped models fit on part of those
+  designs (their cards' ``training`` rows; the rest held out for their cards and interval
+  calibration); the peer on all.
 
 The errors are those of the cards' ``test_set`` and ``bench/surrogate/sweep_nn.py``
 (:func:`surrogate.sweep.scoring.score_pairs`, over every test design x band frequency). Time per

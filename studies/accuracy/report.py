@@ -362,8 +362,8 @@ def _band_section(res: dict[str, Any]) -> list[str]:
          "with 48 + 24 POD modes, `studies/output_choice/`) is fitted here on the first "
          f"{band['n_train']:,} designs of `datasets/{band['train']}` in Sobol order ("
          + (f"the {band['recorded_train']:,} training designs `{band['first_model']}`'s card "
-            "records; the shipped models fit on 90 % of them, the rest held out for their cards"
-            " and interval calibration" if band["n_train"] == band["recorded_train"] else
+            f"records; it fits on {band['rows'][0]['fitted']:,} of them, the rest held out for "
+            "its card and interval calibration" if band["n_train"] == band["recorded_train"] else
             f"a CI-sized subset of the {band['recorded_train']:,} `{band['first_model']}`'s "
             "card records")
          + f"; fit {_t(peer['fit_s'])}, one thread). Errors as the cards' `test_set` and "
