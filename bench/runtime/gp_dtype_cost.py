@@ -3,11 +3,16 @@ and its mean (K* @ alpha, 177 targets) as one ONNX graph in float64 and in float
 like bench/runtime/predict.py (one thread, thread CPU time, medians of interleaved rounds).
 
     .venv/bin/python bench/runtime/gp_dtype_cost.py [--designs 6500] [--rounds 15]
+    .venv/bin/python bench/runtime/gp_dtype_cost.py --model models/gp-sweep
 
 The graph is the kernel and mean of surrogate/sweep/gp_export.py (Matern 5/2 on 14 encoded
 features, its squared distances by the |x|^2 - 2 x.X + |X|^2 expansion) on random inputs: the
 arithmetic and shapes of the shipped graph's first part at the full dataset's size, not its
 values, so it says which precision can answer within a time, not how accurate it would be.
+``--model`` says that: it reads a sweep GP's own constants from its graph (the fitted designs,
+length scales, alpha) and prints how far the float32 kernel and mean land from the float64 ones
+in the targets (the POD coefficients the decode turns into amplitudes), at random designs and
+near fitted ones, against the targets' own spread.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ import argparse
 import time
 
 import numpy as np
+import onnx
 import onnxruntime as ort
 from onnx import TensorProto, helper, numpy_helper
 
@@ -50,12 +56,50 @@ def session(onnx_bytes: bytes) -> ort.InferenceSession:
     return ort.InferenceSession(onnx_bytes, opts, providers=["CPUExecutionProvider"])
 
 
+def float32_mean_error(model_dir: str, n: int = 2000) -> None:
+    """Print |mean_float32 - mean_float64| of the sweep GP in ``model_dir`` (its targets, the
+    scaled POD coefficients) at ``n`` uniform designs and ``n`` designs 0.01 from fitted ones."""
+    graph = onnx.load(f"{model_dir}/model.onnx")
+    c = {i.name: numpy_helper.to_array(i) for i in graph.graph.initializer}
+    for name in ("alpha", "Xs_T"):  # stored transposed when the export wrote Gemm for MatMul
+        c.setdefault(name, c.get(f"{name}__T", np.empty((0, 0))).T)
+    alpha = c["alpha"]
+
+    def mean(x: np.ndarray, dtype: type) -> tuple[np.ndarray, np.ndarray]:
+        xs = (x.astype(dtype) - dtype(0.5)) * c["inv_ls"].astype(dtype)
+        X_T, X_sq = c["Xs_T"].astype(dtype), c["Xs_sq"].astype(dtype)
+        d2 = np.maximum((xs * xs).sum(1, keepdims=True) - dtype(2) * xs @ X_T + X_sq, 0)
+        r = np.sqrt(dtype(5) * d2)
+        k = dtype(c["amp"]) * (1 + r + dtype(5 / 3) * d2) * np.exp(-r)
+        return k @ alpha.astype(dtype), np.abs(k) @ np.abs(alpha.astype(dtype))
+
+    rng = np.random.default_rng(0)
+    fitted = c["Xs_T"].T / c["inv_ls"] + 0.5
+    d = fitted.shape[1]
+    near = fitted[rng.integers(0, len(fitted), n)] + 0.01 * rng.standard_normal((n, d))
+    print(f"{model_dir}: {len(fitted)} fitted designs, {alpha.shape[1]} targets, "
+          f"max |alpha| {np.abs(alpha).max():.3g}")
+    for name, x in (("uniform", rng.random((n, d))), ("near fitted", np.clip(near, 0, 1))):
+        y64, terms = mean(x, np.float64)
+        diff = np.abs(mean(x, np.float32)[0] - y64)
+        spread = y64.std(axis=0)
+        print(f"  {name}: |d target| median {np.median(diff):.2g}, p99 "
+              f"{np.quantile(diff, 0.99):.2g}, max {diff.max():.2g}; relative to the "
+              f"target's spread: max "
+              f"{(diff / spread).max():.2g}; sum |k alpha| / |target| median "
+              f"{np.median(terms / np.maximum(np.abs(y64), 1e-12)):.3g}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--designs", type=int, default=6500, help="fitted designs N (default 6500)")
     ap.add_argument("--rounds", type=int, default=15, help="interleaved rounds (default 15)")
     ap.add_argument("--calls", type=int, default=20, help="calls per round (default 20)")
+    ap.add_argument("--model", help="a sweep GP's directory: its float32 mean's error instead")
     args = ap.parse_args()
+    if args.model:
+        float32_mean_error(args.model)
+        return
     runs = {}
     for dtype in (np.float64, np.float32):
         s = session(kernel_mean_graph(args.designs, dtype))
