@@ -34,6 +34,7 @@ from error_model import (
     error_t_entry,
     fit_surrogate_error,
     fit_sweep_error,
+    select_outputs,
     write_error_t,
 )
 
@@ -284,6 +285,9 @@ def main() -> None:
                     "model's card as its calibration_error_t (the t calibrate applies to it; "
                     "replaces an earlier one; measure every output wanted in one run, e.g. "
                     "--sensors magnitude,normal), re-sealed and replaced atomically")
+    ap.add_argument("--write-outputs", default=None, metavar="NAMES",
+                    help="with --write-card: only these measured outputs, comma-separated "
+                    "(default: every output measured); the others keep SURROGATE_ERROR_T")
     ap.add_argument("--error-check", action="store_true",
                     help="only check the surrogate's error at the true inputs of the study's "
                     "measurements against the error model (probability integral transform)")
@@ -322,6 +326,8 @@ def main() -> None:
         return
     if args.write_card and (not args.sweep_error or args.model is None):
         ap.error("--write-card needs --sweep-error and --model DIR (the card written)")
+    if args.write_outputs is not None and not args.write_card:
+        ap.error("--write-outputs needs --write-card")
     if args.sweep_error:
         if args.sweep is None:
             ap.error("--sweep-error needs --sweep DIR: a dataset of "
@@ -334,6 +340,10 @@ def main() -> None:
             print("\n".join(lines), flush=True)
             measured = {**fitted, "outputs": {**measured["outputs"], **fitted["outputs"]}}
         if args.write_card:
+            try:
+                measured = select_outputs(measured, args.write_outputs)
+            except ValueError as e:
+                sys.exit(f"--write-outputs: nothing written: {e}")
             command = "python bench/calibration/calibrate.py " + shlex.join(sys.argv[1:])
             entry = error_t_entry(predictors[sensors[0]], measured, args.sweep, designs, command)
             try:

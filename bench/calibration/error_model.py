@@ -528,6 +528,20 @@ def error_t_entry(predictor, fitted: dict[str, Any], sweep: Path, designs: Path 
         "measured": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")}
 
 
+def select_outputs(measured: dict[str, Any], names: str | None) -> dict[str, Any]:
+    """``measured`` (of :func:`fit_sweep_error`) with only the outputs ``names``
+    (comma-separated; None: all of them), for the card (``--write-outputs``): an output not
+    measured, or none, raises ValueError naming what was measured."""
+    if names is None:
+        return measured
+    keep = [o.strip() for o in names.split(",") if o.strip()]
+    other = [o for o in keep if o not in measured["outputs"]]
+    if not keep or other:
+        raise ValueError(f"{names!r}: not measured here ({', '.join(other) or 'none given'}); "
+                         f"measured: {', '.join(measured['outputs'])}")
+    return {**measured, "outputs": {o: measured["outputs"][o] for o in keep}}
+
+
 def write_error_t(model_dir: Path, entry: dict[str, Any]) -> dict[str, Any]:
     """Write ``entry`` as the :data:`calibration.fit.CARD_ERROR_KEY` of the card of
     ``model_dir`` (replacing any earlier one; every other key unchanged): the directory

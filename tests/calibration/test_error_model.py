@@ -39,7 +39,7 @@ from surrogate.runtime import load_predictor
 from surrogate.runtime.card import ModelFileError, card_digest, replace_card, verify_model_dir
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench" / "calibration"))
-from error_model import error_t_entry, fit_t_per_frequency, write_error_t
+from error_model import error_t_entry, fit_t_per_frequency, select_outputs, write_error_t
 
 DESIGN = REFERENCE_DESIGNS["bare motor"]
 
@@ -199,6 +199,20 @@ def test_the_bench_writer_round_trips_through_the_card(model_copy):
     t = surrogate_error_t("profile_um", load_predictor(model_copy).card)
     assert t["source"] == "model card" and t["nu"] == 3.33 and t["scale"] == (2.0, 3.0, 4.0)
     assert not list(model_copy.parent.glob(".*tmp"))  # no temporary file left behind
+
+
+def test_only_the_outputs_asked_for_are_written():
+    """--write-outputs: a measured output left out keeps SURROGATE_ERROR_T; one not measured,
+    or none, is refused naming what was measured."""
+    measured = {"outputs": {"center_amplitude_um": {"nu": 2.5}, "profile_um": OWN_PROFILE},
+                "n_designs": 512}
+    assert select_outputs(measured, None) is measured
+    got = select_outputs(measured, "profile_um")
+    assert list(got["outputs"]) == ["profile_um"] and got["n_designs"] == 512
+    assert list(measured["outputs"]) == ["center_amplitude_um", "profile_um"]  # not changed
+    for names in ("profile_normal_um", " , "):
+        with pytest.raises(ValueError, match="measured: center_amplitude_um, profile_um"):
+            select_outputs(measured, names)
 
 
 BAD = {
