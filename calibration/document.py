@@ -69,7 +69,8 @@ def statement(summary: dict[str, dict[str, Any]]) -> str:
 
 def _error_model(cal: Calibration) -> dict[str, dict[str, Any]]:
     """Per output read: the surrogate's error model as used (the scale at each measured
-    frequency of that output, and its mean over the output's points)."""
+    frequency of that output, and its mean over the output's points) and where it came from
+    (``source``: the model card's own, SURROGATE_ERROR_T, or the Gaussian)."""
     fwd = cal.forward
     c = cal.point_scale
     f = np.array([p.frequency_hz for p in fwd.measurement.points])
@@ -83,7 +84,7 @@ def _error_model(cal: Calibration) -> dict[str, dict[str, Any]]:
             "scale": _r(float(np.mean(c[g.index])), 4), "scale_by_frequency_hz": per_f,
             "length_mm": e["length_mm"], "frequency_hz": e["frequency_hz"],
             "shared_within_hz": e["shared_within_hz"], "profile_kernel": e["profile_kernel"],
-            "frequency_kernel": e["frequency_kernel"]}
+            "frequency_kernel": e["frequency_kernel"], "source": e["source"]}
     return out
 
 

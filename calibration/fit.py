@@ -12,9 +12,9 @@ per output read and cluster of its frequencies (frequencies chained at most
 ``shared_within_hz`` apart share lam; clusters are independent), with sigma_i the stated
 standard uncertainty (independent between points), s_i the surrogate's own predictive log-std
 (its 95 % bounds are exp(+-1.96 s)), nu, c_i (per frequency) and the clusters per output read
-(:data:`SURROGATE_ERROR_T`: a multivariate Student-t measured on the model's held-out rows and
-on the sweep dataset's designs at many frequencies, or a model's own,
-:data:`SURROGATE_ERROR_T_BY_MODEL`; for an output not listed, or with
+(:func:`surrogate_error_t`: a multivariate Student-t measured on FE solves the model never
+trained on, the model's own from its card's :data:`CARD_ERROR_KEY` entry when measured there,
+else :data:`SURROGATE_ERROR_T`; for an output in neither, or with
 ``error_model = "gaussian"`` or a given ``std_factor``, lam = 1 and c = ``k`` =
 :func:`surrogate_std_factor`, the card's widening), and C the correlation of the surrogate's
 errors between points (:meth:`ForwardModel.error_correlation`: a surrogate that is wrong at
@@ -40,6 +40,7 @@ first ``burn`` are dropped. Everything is seeded: the same input gives the same 
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -54,10 +55,12 @@ from calibration.forward import ForwardModel
 from calibration.likelihood import hdi, mixture_log_likelihood
 from calibration.measurement import Measurement
 from calibration.priors import Prior, PriorError, priors_for
+from surrogate.runtime.card import ModelFileError
 
-__all__ = ["ERROR_MODELS", "IDENTIFIABLE_WIDTH_RATIO", "INTERVAL_KINDS", "SCALE_HZ", "SPREADS",
-           "SURROGATE_ERROR_T", "SURROGATE_ERROR_T_BY_MODEL", "Calibration", "calibrate",
-           "error_settings", "point_scales", "surrogate_error_t", "surrogate_std_factor"]
+__all__ = ["CARD_ERROR_KEY", "ERROR_MODELS", "IDENTIFIABLE_WIDTH_RATIO", "INTERVAL_KINDS",
+           "SCALE_HZ", "SPREADS", "SURROGATE_ERROR_T", "Calibration", "calibrate",
+           "card_error_t", "check_error_t", "error_settings", "point_scales",
+           "surrogate_error_t", "surrogate_std_factor"]
 
 #: a parameter whose 95 % posterior interval is wider than this fraction of its prior's 95 %
 #: interval (in the sampling coordinate) is reported as not determined by the data
@@ -88,7 +91,8 @@ SCALE_HZ = tuple(float(f) for f in range(100, 251, 10))
 #: mixing variable shared at a frequency difference where a shared one has the higher
 #: likelihood on the sweep's pairs of frequencies of one design, the frequency length fitted to
 #: the pairs' correlation there (nn-default for the magnitude outputs, nn-normal for the normal
-#: component). An output not listed: the Gaussian with the card's factor
+#: component). It serves every model and output whose card has no t of its own
+#: (:data:`CARD_ERROR_KEY`); an output in neither: the Gaussian with the card's factor
 #: (:func:`surrogate_std_factor`).
 SURROGATE_ERROR_T: dict[str, dict[str, Any]] = {
     "center_amplitude_um": {
@@ -104,29 +108,21 @@ SURROGATE_ERROR_T: dict[str, dict[str, Any]] = {
         "scale": (1.01, 0.925, 0.992, 1.1, 1.18, 1.23, 1.29, 1.31, 1.31, 1.31, 1.34, 1.41, 1.4,
                   1.43, 1.51, 1.61)},
 }
-#: the surrogate's error of a model measured on that model, by model name (its card's
-#: ``name``): per output as :data:`SURROGATE_ERROR_T`, which serves every model and output not
-#: listed here. Measured (``python bench/calibration/calibrate.py --sweep-error --model
-#: models/NAME --sweep datasets/default-sweep-test --sweep-designs all``) on the 512 designs of
-#: the sweep test set (no model trained on them) x the 16 frequencies of a 10 Hz grid, profile
-#: 0-40 mm every 2 mm: the profile length, nu and the scales, the shared mixing variable and
-#: the frequency length, all on those designs. nn-sweep as retrained on 6,270 designs (commit
-#: 612bb01): under SURROGATE_ERROR_T its profile errors crowd the upper quarter of the
-#: probability integral transform (0.58 of them, against 0.25), its face's the lower ones.
-SURROGATE_ERROR_T_BY_MODEL: dict[str, dict[str, dict[str, Any]]] = {
-    "nn-sweep": {
-        "center_amplitude_um": {
-            "nu": 2.7, "frequency_hz": 26.1, "shared_within_hz": 70.0,
-            "scale": (0.907, 0.866, 0.863, 0.737, 0.625, 0.664, 0.71, 0.743, 0.732, 0.776,
-                      0.787, 0.792, 0.785, 0.781, 0.774, 0.762)},
-        "profile_um": {
-            "nu": 2.19, "length_mm": 6.9, "frequency_hz": 14.8, "shared_within_hz": 20.0,
-            "scale": (1.01, 1.0, 1.04, 1.11, 1.14, 1.17, 1.19, 1.23, 1.25, 1.25, 1.26, 1.32,
-                      1.42, 1.47, 1.55, 1.69)},
-    },
-}
-#: "t": SURROGATE_ERROR_T (SURROGATE_ERROR_T_BY_MODEL for a model listed there); "gaussian":
-#: the first versions' Gaussian widened by the card's k
+#: The model card's key for the surrogate's error model measured on that model (the same
+#: Student-t per output read as :data:`SURROGATE_ERROR_T`, in the model's own card so that a
+#: model retrained under the same name does not inherit it). Written by ``python
+#: bench/calibration/calibrate.py --sweep-error --model models/NAME --sweep DIR --write-card``;
+#: read at run time by :func:`surrogate_error_t`. Its form (:func:`check_error_t`):
+#: ``outputs`` {output: {nu, scale (one per ``scale_hz``), frequency_hz, shared_within_hz,
+#: length_mm (profile outputs)}}, ``scale_hz``, ``graph_sha256`` (the digest of the graph it
+#: was measured on, which must be the card's), ``measured_on`` (the dataset's path,
+#: ``manifest_sha256``, ``designs``, ``n_designs``, frequencies and profile points),
+#: ``command`` and ``measured`` (UTC).
+CARD_ERROR_KEY = "calibration_error_t"
+#: the outputs read at one point (the unit's face): no correlation length along a profile
+FACE_OUTPUTS = ("center_amplitude_um", "center_normal_um", "center_uz_um")
+#: "t": the Student-t of :func:`surrogate_error_t` (the model card's own, else
+#: SURROGATE_ERROR_T); "gaussian": the first versions' Gaussian widened by the card's k
 ERROR_MODELS = ("t", "gaussian")
 #: the reported 95 % interval: highest posterior density in the sampling coordinate (includes
 #: a prior bound the posterior piles against) or equal-tailed (2.5-97.5 percentiles)
@@ -247,39 +243,126 @@ class Calibration:
         return mean, self.point_scale * std
 
 
-def surrogate_error_t(output: str, model: str | None = None) -> dict[str, Any] | None:
-    """The Student-t of the surrogate's error of ``output`` for the model named ``model``:
-    its own (:data:`SURROGATE_ERROR_T_BY_MODEL`) when measured, else
-    :data:`SURROGATE_ERROR_T`'s; None for an output in neither."""
-    own = SURROGATE_ERROR_T_BY_MODEL.get(model or "", {})
-    return own.get(output, SURROGATE_ERROR_T.get(output))
+def _positive(value: Any) -> bool:
+    return (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value) and value > 0)
+
+
+def check_error_t(entry: Any, card: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """The per-output Student-t of a :data:`CARD_ERROR_KEY` entry ``entry`` for the model card
+    ``card``, each with its ``scale_hz``, after checking the entry's form: ``outputs`` a
+    non-empty mapping of the card's own outputs to {nu > 0, scale (positive, one per
+    ``scale_hz``, which increases strictly), frequency_hz > 0, shared_within_hz >= 0, and for
+    an output along the profile length_mm > 0}, ``graph_sha256`` the digest of the card's
+    graph file (the entry was measured on this very model), ``measured_on`` with the dataset's
+    ``manifest_sha256`` and ``n_designs``, ``command`` and ``measured``. Anything else raises
+    :class:`surrogate.runtime.card.ModelFileError` naming the key and what is wrong."""
+
+    def bad(key: str, why: str) -> ModelFileError:
+        return ModelFileError(f"{CARD_ERROR_KEY}.{key}" if key else CARD_ERROR_KEY,
+                              f"model {card.get('name')!r}: card entry {CARD_ERROR_KEY}"
+                              + (f".{key}" if key else "") + f": {why} (re-measure it: python "
+                              "bench/calibration/calibrate.py --sweep-error --model DIR "
+                              "--sweep DATASET --write-card)")
+
+    if not isinstance(entry, Mapping):
+        raise bad("", f"{type(entry).__name__}, not an object")
+    graph = card.get("graph", {}).get("file") if isinstance(card.get("graph"), Mapping) else None
+    want = card.get("files", {}).get(graph) if graph else None
+    if want is None or entry.get("graph_sha256") != want:
+        raise bad("graph_sha256", f"{str(entry.get('graph_sha256'))[:12]}... is not the "
+                  f"digest of this model's graph ({str(want)[:12]}...): measured on another "
+                  "model")
+    where = entry.get("measured_on")
+    if (not isinstance(where, Mapping) or not isinstance(where.get("manifest_sha256"), str)
+            or not isinstance(where.get("n_designs"), int) or where["n_designs"] < 1):
+        raise bad("measured_on", "must name the dataset (manifest_sha256) and the number of "
+                  "designs (n_designs >= 1) it was measured on")
+    for key in ("command", "measured"):
+        if not isinstance(entry.get(key), str) or not entry[key]:
+            raise bad(key, "missing; must say how and when it was measured")
+    hz = entry.get("scale_hz")
+    if (not isinstance(hz, list | tuple) or not hz
+            or not all(isinstance(f, int | float) and math.isfinite(f) for f in hz)
+            or any(b <= a for a, b in itertools.pairwise(hz))):
+        raise bad("scale_hz", f"{hz!r}: must be frequencies [Hz] increasing strictly")
+    outputs = entry.get("outputs")
+    if not isinstance(outputs, Mapping) or not outputs:
+        raise bad("outputs", "must map at least one output to its Student-t")
+    known = {o.get("name") for o in card.get("outputs", []) if isinstance(o, Mapping)}
+    out: dict[str, dict[str, Any]] = {}
+    for name, t in outputs.items():
+        key = f"outputs.{name}"
+        if name not in known:
+            raise bad(key, f"not an output of the model ({', '.join(sorted(map(str, known)))})")
+        if not isinstance(t, Mapping):
+            raise bad(key, "must be an object")
+        need = ("nu", "frequency_hz") + (() if name in FACE_OUTPUTS else ("length_mm",))
+        for k in need:
+            if not _positive(t.get(k)):
+                raise bad(f"{key}.{k}", f"{t.get(k)!r}: must be a finite number > 0")
+        sw = t.get("shared_within_hz")
+        if not (_positive(sw) or sw == 0):
+            raise bad(f"{key}.shared_within_hz", f"{sw!r}: must be a finite number >= 0")
+        sc = t.get("scale")
+        if (not isinstance(sc, list | tuple) or len(sc) != len(hz)
+                or not all(_positive(c) for c in sc)):
+            raise bad(f"{key}.scale", f"must be {len(hz)} numbers > 0, one per scale_hz")
+        out[name] = {"nu": float(t["nu"]), "scale": tuple(float(c) for c in sc),
+                     "scale_hz": tuple(float(f) for f in hz),
+                     "frequency_hz": float(t["frequency_hz"]), "shared_within_hz": float(sw),
+                     **({} if name in FACE_OUTPUTS else {"length_mm": float(t["length_mm"])})}
+    return out
+
+
+def card_error_t(card: Mapping[str, Any] | None) -> dict[str, dict[str, Any]]:
+    """The Student-t per output measured on the model of ``card`` (its
+    :data:`CARD_ERROR_KEY` entry, checked by :func:`check_error_t`); {} when it has none."""
+    if not card or card.get(CARD_ERROR_KEY) is None:
+        return {}
+    return check_error_t(card[CARD_ERROR_KEY], card)
+
+
+def surrogate_error_t(output: str, card: Mapping[str, Any] | None = None
+                      ) -> dict[str, Any] | None:
+    """The Student-t of the surrogate's error of ``output`` for the model of ``card`` (its
+    card dict, ``Predictor.card``): the card's own (:data:`CARD_ERROR_KEY`) when measured
+    there, else :data:`SURROGATE_ERROR_T`'s; None for an output in neither. Keys: nu, scale
+    (one per scale_hz), scale_hz, frequency_hz, shared_within_hz, length_mm (profile outputs),
+    source ("model card" or "SURROGATE_ERROR_T")."""
+    own = card_error_t(card).get(output)
+    if own is not None:
+        return {**own, "source": "model card"}
+    t = SURROGATE_ERROR_T.get(output)
+    return None if t is None else {**t, "scale": tuple(t["scale"]), "scale_hz": SCALE_HZ,
+                                   "source": "SURROGATE_ERROR_T"}
 
 
 def error_settings(output: str, t_model: bool, k: float, length_mm: float | None = None,
-                   frequency_hz: float | None = None, model: str | None = None
+                   frequency_hz: float | None = None, card: Mapping[str, Any] | None = None
                    ) -> dict[str, Any]:
     """The surrogate's error model of one output read: the Student-t of
-    :func:`surrogate_error_t` (``t_model`` and the output listed; the model named ``model``'s
-    own when measured) or the first versions'
-    Gaussian (factor ``k``, exponential kernels of :data:`ERROR_LENGTH_MM` and
-    :data:`ERROR_FREQUENCY_HZ`, lam = 1); ``length_mm`` and
-    ``frequency_hz`` replace the lengths when given. Keys: nu (None: Gaussian), scale (a
+    :func:`surrogate_error_t` (``t_model`` and the output listed; the one in the model's
+    ``card`` when measured there) or the first versions' Gaussian (factor ``k``, exponential
+    kernels of :data:`ERROR_LENGTH_MM` and :data:`ERROR_FREQUENCY_HZ`, lam = 1); ``length_mm``
+    and ``frequency_hz`` replace the lengths when given. Keys: nu (None: Gaussian), scale (a
     number, or a tuple over scale_hz), scale_hz, length_mm (None at the unit's face),
-    frequency_hz, shared_within_hz (None: all frequencies), profile_kernel, frequency_kernel."""
-    t = surrogate_error_t(output, model) if t_model else None
-    face = output in ("center_amplitude_um", "center_normal_um", "center_uz_um")
+    frequency_hz, shared_within_hz (None: all frequencies), profile_kernel, frequency_kernel,
+    source (where the t came from: "model card", "SURROGATE_ERROR_T"; "gaussian")."""
+    t = surrogate_error_t(output, card) if t_model else None
+    face = output in FACE_OUTPUTS
     if t is None:
         length = ERROR_LENGTH_MM.get(output, ERROR_LENGTH_MM["profile_um"])
         return {"nu": None, "scale": float(k), "scale_hz": None,
                 "length_mm": None if face else float(length_mm or length),
                 "frequency_hz": float(frequency_hz or ERROR_FREQUENCY_HZ),
                 "shared_within_hz": None, "profile_kernel": "exponential",
-                "frequency_kernel": "exponential"}
-    return {"nu": t["nu"], "scale": tuple(t["scale"]), "scale_hz": SCALE_HZ,
+                "frequency_kernel": "exponential", "source": "gaussian"}
+    return {"nu": t["nu"], "scale": tuple(t["scale"]), "scale_hz": tuple(t["scale_hz"]),
             "length_mm": None if face else float(length_mm or t["length_mm"]),
             "frequency_hz": float(frequency_hz or t["frequency_hz"]),
             "shared_within_hz": t["shared_within_hz"], "profile_kernel": "matern32",
-            "frequency_kernel": "gaussian"}
+            "frequency_kernel": "gaussian", "source": t["source"]}
 
 
 def point_scales(fwd: ForwardModel, errors: Mapping[str, Mapping[str, Any]],
@@ -339,7 +422,7 @@ def calibrate(predictor: Any, measurement: Measurement, fit: Sequence[str], *,
     y, rel = fwd.y, fwd.rel_sigma
     t_model = error_model == "t" and std_factor is None
     errors = {g.output: error_settings(g.output, t_model, k, error_length_mm,
-                                       error_frequency_hz, predictor.card.get("name"))
+                                       error_frequency_hz, predictor.card)
               for g in fwd.groups}
     lengths = {o: errors[o]["length_mm"] for o in fwd.profile_outputs}
     freq_hz = {o: e["frequency_hz"] for o, e in errors.items()}

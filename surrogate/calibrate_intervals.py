@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import json
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -14,7 +12,7 @@ import numpy as np
 from surrogate.card_warnings import card_warnings
 from surrogate.intervals import calibrate, coverage, residuals
 from surrogate.registry import manifest_sha256
-from surrogate.runtime.card import CARD_NAME, seal_card, verify_model_dir
+from surrogate.runtime.card import replace_card, verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, load_predictor
 from surrogate.sweep.targets import load_sweep_datasets, pair_rows
 from surrogate.train import load_datasets, split
@@ -75,7 +73,7 @@ def calibrate_model_dir(path: str | Path, data: Sequence[str | Path] | None = No
     entry["command"] = "hapticrom models calibrate-intervals"
     if write:
         new = {**card, CALIBRATION_KEY: entry}
-        _write_card(root, {**new, "warnings": card_warnings(new)})
+        replace_card(root, {**new, "warnings": card_warnings(new)})
     return entry
 
 
@@ -88,11 +86,3 @@ def _residuals(raw: Any, rows: Any, which: np.ndarray, extra: list[str], sweep: 
         return residuals(raw.predict(codes), centre, profile, ext)
     return residuals(raw.predict(rows.codes[which]), rows.center_um[which],
                      rows.profile_um[which], {name: rows.extra_um[name][which] for name in extra})
-
-
-def _write_card(root: Path, card: dict[str, Any]) -> None:
-    """Replace ``card.json`` atomically with the sealed ``card`` (the files are unchanged)."""
-    tmp = root.parent / f".{root.name}.{CARD_NAME}.tmp"
-    tmp.write_text(json.dumps(seal_card(card), indent=1) + "\n")
-    os.replace(tmp, root / CARD_NAME)
-    verify_model_dir(root)

@@ -20,13 +20,23 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import statistics
+import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from error_model import SWEEP_DESIGNS_FILE, error_check, fit_surrogate_error, fit_sweep_error
+from error_model import (
+    SWEEP_DESIGNS_FILE,
+    error_check,
+    error_t_entry,
+    fit_surrogate_error,
+    fit_sweep_error,
+    select_outputs,
+    write_error_t,
+)
 
 from calibration import calibrate, surrogate_std_factor
 from calibration.fit import ERROR_FREQUENCY_HZ, ERROR_LENGTH_MM, ERROR_MODELS, SPREADS
@@ -239,8 +249,9 @@ def main() -> None:
     ap.add_argument("--spread", default="posterior", choices=SPREADS,
                     help="how the surrogate's spread enters the likelihood (calibration.fit)")
     ap.add_argument("--error-model", default="t", choices=ERROR_MODELS,
-                    help="the surrogate's error: Student-t (SURROGATE_ERROR_T) or the Gaussian "
-                    "with the card's factor (calibration.fit)")
+                    help="the surrogate's error: Student-t (the model card's "
+                    "calibration_error_t, else SURROGATE_ERROR_T) or the Gaussian with the "
+                    "card's factor (calibration.fit)")
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--std-factor", type=float, default=None)
     ap.add_argument("--error-length-mm", type=float, default=None,
@@ -269,6 +280,14 @@ def main() -> None:
     ap.add_argument("--sweep-max-mm", type=float, default=None,
                     help="with --sweep-error: only the profile points up to this distance from "
                     "the edge [mm] (default: to the end of the model's profile)")
+    ap.add_argument("--write-card", action="store_true",
+                    help="with --sweep-error and --model: write what was measured into that "
+                    "model's card as its calibration_error_t (the t calibrate applies to it; "
+                    "replaces an earlier one; measure every output wanted in one run, e.g. "
+                    "--sensors magnitude,normal), re-sealed and replaced atomically")
+    ap.add_argument("--write-outputs", default=None, metavar="NAMES",
+                    help="with --write-card: only these measured outputs, comma-separated "
+                    "(default: every output measured); the others keep SURROGATE_ERROR_T")
     ap.add_argument("--error-check", action="store_true",
                     help="only check the surrogate's error at the true inputs of the study's "
                     "measurements against the error model (probability integral transform)")
@@ -305,15 +324,34 @@ def main() -> None:
             print(f"{s} ({predictor.card.get('name')}):")
             print("\n".join(error_check(subjects, predictor, s)))
         return
+    if args.write_card and (not args.sweep_error or args.model is None):
+        ap.error("--write-card needs --sweep-error and --model DIR (the card written)")
+    if args.write_outputs is not None and not args.write_card:
+        ap.error("--write-outputs needs --write-card")
     if args.sweep_error:
         if args.sweep is None:
             ap.error("--sweep-error needs --sweep DIR: a dataset of "
                      "datasets/spaces/default-sweep.toml")
+        designs = None if args.sweep_designs == "all" else Path(args.sweep_designs)
+        measured: dict = {"outputs": {}}
         for s, predictor in predictors.items():
             print(f"{s} ({predictor.card.get('name')}):")
-            designs = None if args.sweep_designs == "all" else Path(args.sweep_designs)
-            print("\n".join(fit_sweep_error(predictor, s, args.sweep, designs,
-                                             args.sweep_max_mm)), flush=True)
+            lines, fitted = fit_sweep_error(predictor, s, args.sweep, designs, args.sweep_max_mm)
+            print("\n".join(lines), flush=True)
+            measured = {**fitted, "outputs": {**measured["outputs"], **fitted["outputs"]}}
+        if args.write_card:
+            try:
+                measured = select_outputs(measured, args.write_outputs)
+            except ValueError as e:
+                sys.exit(f"--write-outputs: nothing written: {e}")
+            command = "python bench/calibration/calibrate.py " + shlex.join(sys.argv[1:])
+            entry = error_t_entry(predictors[sensors[0]], measured, args.sweep, designs, command)
+            try:
+                write_error_t(Path(args.model), entry)
+            except ValueError as e:
+                sys.exit(f"--write-card: nothing written: {e}")
+            print(f"wrote calibration_error_t ({', '.join(entry['outputs'])}) into "
+                  f"{Path(args.model) / 'card.json'}")
         return
     if args.surrogate_error:
         for s, predictor in predictors.items():

@@ -133,8 +133,7 @@ def _pit_blocks(fwd: ForwardModel, sd: np.ndarray, e: np.ndarray, version: str, 
     from calibration.fit import error_settings
 
     t_model = version == "t"
-    errors = {g.output: error_settings(g.output, t_model, k,
-                                       model=fwd.predictor.card.get("name"))
+    errors = {g.output: error_settings(g.output, t_model, k, card=fwd.predictor.card)
               for g in fwd.groups}
     if version == "t, previous":
         for o, e_ in errors.items():
@@ -358,23 +357,22 @@ def fit_t_per_frequency(x: np.ndarray, corr: np.ndarray) -> tuple[float, np.ndar
 def current_t_check(x: np.ndarray, f: np.ndarray, dist: np.ndarray, name: str,
                     nu: float, c: np.ndarray, length: float | None,
                     t: dict[str, Any], label: str) -> str:
-    """How the Student-t ``t`` (an entry of :data:`calibration.fit.SURROGATE_ERROR_T`, called
-    ``label``) of ``name`` describes the errors ``x`` (designs, frequencies, points; in units
-    of the raw log-std), one frequency at a time: the mean log-likelihood per (design,
-    frequency) vector under it and under the refit (nu, scales ``c``, Matern length
-    ``length``), and the quartile fractions of the probability integral transform
-    F(delta / m; m, nu) under ``t`` (0.25 each if it describes them; the upper quarters crowd
-    when it is too narrow)."""
+    """How the Student-t ``t`` (of :func:`calibration.fit.surrogate_error_t`, with its
+    ``scale_hz``; called ``label``) of ``name`` describes the errors ``x`` (designs,
+    frequencies, points; in units of the raw log-std), one frequency at a time: the mean
+    log-likelihood per (design, frequency) vector under it and under the refit (nu, scales
+    ``c``, Matern length ``length``), and the quartile fractions of the probability integral
+    transform F(delta / m; m, nu) under ``t`` (0.25 each if it describes them; the upper
+    quarters crowd when it is too narrow)."""
     from scipy import stats
 
-    from calibration.fit import SCALE_HZ
     from calibration.likelihood import mvt_logpdf, profile_kernel
 
     lag = np.abs(dist[:, None] - dist[None, :])
     m = x.shape[2]
     Kc = np.ones((1, 1)) if m == 1 else profile_kernel(lag, t["length_mm"], "matern32")
     Kn = np.ones((1, 1)) if m == 1 else profile_kernel(lag, float(length), "matern32")
-    cc = np.interp(f, SCALE_HZ, t["scale"])
+    cc = np.interp(f, t["scale_hz"], t["scale"])
     ll_cur = ll_new = 0.0
     pit = []
     for i in range(f.size):
@@ -386,19 +384,21 @@ def current_t_check(x: np.ndarray, f: np.ndarray, dist: np.ndarray, name: str,
     n = x.shape[0] * f.size
     q = np.histogram(np.concatenate(pit), bins=[0, 0.25, 0.5, 0.75, 1.0])[0] / n
     return (f"    against {label} (nu {t['nu']:g}, scale "
-            + " / ".join(f"{a:.3g}" for a in np.interp([100, 150, 200, 250], SCALE_HZ,
+            + " / ".join(f"{a:.3g}" for a in np.interp([100, 150, 200, 250], t["scale_hz"],
                                                          t["scale"]))
             + " at 100 / 150 / 200 / 250 Hz"
             + ("" if m == 1 else f", length {t['length_mm']:g} mm") + "): log-lik per vector "
             f"{ll_cur / n:.3f} (refit {ll_new / n:.3f}); PIT quartile fractions under it "
             + " ".join(f"{v:.2f}" for v in q) + "; refit scale / current at 100 / 150 / 200 / "
             "250 Hz " + " / ".join(f"{a:.2f}" for a in np.interp([100, 150, 200, 250], f, c)
-                                   / np.interp([100, 150, 200, 250], SCALE_HZ, t["scale"])))
+                                   / np.interp([100, 150, 200, 250], t["scale_hz"],
+                                               t["scale"])))
 
 
 def fit_sweep_error(predictor, component: str, path: Path,
                     designs: Path | None = SWEEP_DESIGNS_FILE,
-                    max_mm: float | None = None) -> list[str]:
+                    max_mm: float | None = None
+                    ) -> tuple[list[str], dict[str, Any]]:
     """The surrogate's error structure across frequency, per output a ``component`` sensor
     reads (calibration.fit.SURROGATE_ERROR_T): the correlation length along the profile
     (Matern 3/2 against the exponential, on the model's held-out rows, 1 mm grid; for a model
@@ -408,11 +408,14 @@ def fit_sweep_error(predictor, component: str, path: Path,
     correlation rho of its errors under one shared mixing variable lam, and that model's log-
     likelihood per pair of frequencies against independent lams (no correlation): lam is shared
     where it wins. The frequency length is the Gaussian kernel exp(-df^2 / (2 L_f^2)) fitted to
-    rho at those df. Last, per output, how SURROGATE_ERROR_T and the model's own entry of
-    SURROGATE_ERROR_T_BY_MODEL, if any, fit the same errors (:func:`current_t_check`)."""
+    rho at those df. Last, per output, how SURROGATE_ERROR_T and the t of the model's card
+    (calibration.fit.CARD_ERROR_KEY), if any, fit the same errors (:func:`current_t_check`).
+    Returns the printed lines and what was measured: {"outputs": {output: the t as the card
+    holds it (rounded as printed)}, "scale_hz", "n_designs", "frequencies_hz",
+    "profile_mm"} (:func:`error_t_entry` makes the card's entry of it)."""
     from scipy.optimize import minimize_scalar
 
-    from calibration.fit import SURROGATE_ERROR_T, SURROGATE_ERROR_T_BY_MODEL
+    from calibration.fit import card_error_t, surrogate_error_t
     from calibration.likelihood import mvt_logpdf, profile_kernel
 
     outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
@@ -421,6 +424,11 @@ def fit_sweep_error(predictor, component: str, path: Path,
     held = None if sweep_model else held_out_residuals(predictor.uncalibrated())
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
     f, dist, sweep = sweep_residuals(predictor, path, designs, max_mm)
+    n_designs = int(next(iter(sweep.values()))[0].shape[0])
+    own = card_error_t(predictor.card)  # checked before an hour of fitting, not after
+    fitted: dict[str, Any] = {"outputs": {}, "scale_hz": [float(x) for x in f],
+                              "n_designs": n_designs, "frequencies_hz": [float(x) for x in f],
+                              "profile_mm": [float(x) for x in dist]}
     lines = [f"  sweep dataset {path}: {next(iter(sweep.values()))[0].shape[0]} designs x "
              f"{f.size} frequencies ({f[0]:g}-{f[-1]:g} Hz every {SWEEP_STEP_HZ:g}), profile "
              f"points {dist[0]:g}-{dist[-1]:g} mm every {dist[1] - dist[0]:g} mm"]
@@ -476,11 +484,74 @@ def fit_sweep_error(predictor, component: str, path: Path,
         lines.append(f"    -> lam shared within {shared_hz:g} Hz, frequency length (Gaussian) "
                      f"{lf:.1f} Hz" + ("" if length is None else
                                        f", profile length (Matern 3/2) {length:g} mm"))
-        model = predictor.card.get("name")
-        checks = {"SURROGATE_ERROR_T": SURROGATE_ERROR_T[name]}
-        own = SURROGATE_ERROR_T_BY_MODEL.get(model, {}).get(name)
-        if own is not None:
-            checks[f"SURROGATE_ERROR_T_BY_MODEL[{model!r}]"] = own
+        fitted["outputs"][name] = {
+            "nu": float(f"{nu:.3g}"), "scale": [float(f"{a:.3g}") for a in c],
+            "frequency_hz": round(lf, 1), "shared_within_hz": float(shared_hz),
+            **({} if length is None else {"length_mm": float(length)})}
+        checks = {"SURROGATE_ERROR_T": surrogate_error_t(name)}
+        if name in own:
+            checks["the model card's t"] = surrogate_error_t(name, predictor.card)
         lines += [current_t_check(x, f, dist, name, nu, c, length, t, f"{label}[{name!r}]")
                   for label, t in checks.items()]
-    return lines
+    return lines, fitted
+
+
+def error_t_entry(predictor, fitted: dict[str, Any], sweep: Path, designs: Path | None,
+                  command: str) -> dict[str, Any]:
+    """The model card's :data:`calibration.fit.CARD_ERROR_KEY` entry for what
+    :func:`fit_sweep_error` measured on ``predictor`` (``fitted``, merged over the sensor kinds
+    measured): the t per output, ``scale_hz``, the digest of the graph measured, the dataset
+    (path relative to the repository when inside it, ``manifest_sha256``, ``space_hash``, which
+    designs and how many, frequencies, profile points), ``command`` and the UTC time."""
+    import datetime
+
+    from surrogate.registry import manifest_sha256
+
+    card = predictor.card
+    here = Path(sweep).resolve()
+    rel = here.relative_to(ROOT) if here.is_relative_to(ROOT) else here
+    manifest = json.loads((here / "_manifest.json").read_text())
+    dfile = (None if designs is None else str(Path(designs).resolve().relative_to(ROOT))
+             if Path(designs).resolve().is_relative_to(ROOT) else str(designs))
+    return {
+        "method": "multivariate Student-t of ln(FE / surrogate) per output read, in units of "
+                  "the graph's raw log-std (calibration.fit, docs/calibration.md 'The fit')",
+        "outputs": fitted["outputs"], "scale_hz": fitted["scale_hz"],
+        "graph_sha256": card["files"][card["graph"]["file"]],
+        "measured_on": {"dataset": str(rel), "manifest_sha256": manifest_sha256(here),
+                        "space_hash": manifest.get("space_hash"),
+                        "designs": "all" if dfile is None else dfile,
+                        "n_designs": fitted["n_designs"],
+                        "frequencies_hz": fitted["frequencies_hz"],
+                        "profile_mm": fitted["profile_mm"]},
+        "command": command,
+        "measured": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")}
+
+
+def select_outputs(measured: dict[str, Any], names: str | None) -> dict[str, Any]:
+    """``measured`` (of :func:`fit_sweep_error`) with only the outputs ``names``
+    (comma-separated; None: all of them), for the card (``--write-outputs``): an output not
+    measured, or none, raises ValueError naming what was measured."""
+    if names is None:
+        return measured
+    keep = [o.strip() for o in names.split(",") if o.strip()]
+    other = [o for o in keep if o not in measured["outputs"]]
+    if not keep or other:
+        raise ValueError(f"{names!r}: not measured here ({', '.join(other) or 'none given'}); "
+                         f"measured: {', '.join(measured['outputs'])}")
+    return {**measured, "outputs": {o: measured["outputs"][o] for o in keep}}
+
+
+def write_error_t(model_dir: Path, entry: dict[str, Any]) -> dict[str, Any]:
+    """Write ``entry`` as the :data:`calibration.fit.CARD_ERROR_KEY` of the card of
+    ``model_dir`` (replacing any earlier one; every other key unchanged): the directory
+    verified, the entry checked against the card (calibration.fit.check_error_t: a malformed
+    entry, or one measured on another graph, raises ModelFileError and nothing is written),
+    then the card re-sealed and replaced atomically (surrogate.runtime.card.replace_card).
+    Returns the new card."""
+    from calibration.fit import CARD_ERROR_KEY, check_error_t
+    from surrogate.runtime.card import replace_card, verify_model_dir
+
+    card = verify_model_dir(model_dir)
+    check_error_t(entry, card)
+    return replace_card(model_dir, {**card, CARD_ERROR_KEY: entry})

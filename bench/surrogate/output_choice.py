@@ -70,14 +70,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--lead", type=int, default=4, help="gp-each: targets given restarts")
     ap.add_argument("--trees", type=int, default=3000, help="lgbm: trees per target")
     ap.add_argument("--threads", type=int, default=1,
-                    help="BLAS threads (default 1: on a shared machine more threads thrash; "
-                    "vector fitting ran 60x slower in CPU time with the default pool)")
+                    help="BLAS threads and LightGBM's booster-fitting processes (default 1: on "
+                    "a shared machine more threads thrash; vector fitting ran 60x slower in "
+                    "CPU time with the default pool)")
     ap.add_argument("--json", type=Path, help="write the records here")
     args = ap.parse_args(argv)
     try:
         choices = _choices(args)
         made = [learners.make(n, args.seed, gp_rows=args.gp_rows, restarts=args.restarts,
-                              lead=args.lead, trees=args.trees)
+                              lead=args.lead, trees=args.trees, workers=args.threads)
                 for n in args.learners.split(",") if args.learners != "none"]
         full, specs = data.load(args.data, profile=not args.no_profile)
         if args.test_data:

@@ -120,8 +120,9 @@ def _run(args: argparse.Namespace) -> int:
 
 def _error_text(likelihood: dict[str, Any]) -> str:
     """The surrogate's error model per output read, for the printout."""
-    return ", ".join(f"{o} Student-t nu {e['nu']:g} x{e['scale']:g}" if e["nu"] is not None
-                     else f"{o} Gaussian x{e['scale']:g}"
+    own = {"model card": " (the model's own)", "SURROGATE_ERROR_T": " (generic)"}
+    return ", ".join((f"{o} Student-t nu {e['nu']:g} x{e['scale']:g}" if e["nu"] is not None
+                      else f"{o} Gaussian x{e['scale']:g}") + own.get(e.get("source"), "")
                      for o, e in likelihood["surrogate_error"].items())
 
 

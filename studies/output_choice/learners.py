@@ -17,6 +17,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -109,17 +110,23 @@ def lightgbm_available() -> bool:
     return importable("lightgbm")
 
 
-def lgbm(seed: int, trees: int = 3000) -> Callable[[np.ndarray, np.ndarray], Predict]:
-    """LightGBM: one booster per target column, ``trees`` trees at a learning rate of 0.02."""
+def lgbm(seed: int, trees: int = 3000,
+         workers: int = 1) -> Callable[[np.ndarray, np.ndarray], Predict]:
+    """LightGBM: one booster per target column, ``trees`` trees at a learning rate of 0.02,
+    the boosters fitted by ``workers`` processes (each booster single-threaded and seeded, so
+    the models do not depend on ``workers``)."""
     def fit(x: np.ndarray, y: np.ndarray) -> Predict:
         # optional (the `bench` extra): only the LightGBM peer needs it
         import lightgbm
+        from joblib import Parallel, delayed
 
-        models = [lightgbm.LGBMRegressor(n_estimators=trees, learning_rate=0.02, num_leaves=31,
-                                         min_child_samples=5, subsample=0.8, subsample_freq=1,
-                                         colsample_bytree=0.9, random_state=seed, n_jobs=1,
-                                         verbose=-1).fit(x, y[:, j])
-                  for j in range(y.shape[1])]
+        def booster(j: int) -> Any:
+            return lightgbm.LGBMRegressor(
+                n_estimators=trees, learning_rate=0.02, num_leaves=31, min_child_samples=5,
+                subsample=0.8, subsample_freq=1, colsample_bytree=0.9, random_state=seed,
+                n_jobs=1, verbose=-1).fit(x, y[:, j])
+
+        models = Parallel(n_jobs=workers)(delayed(booster)(j) for j in range(y.shape[1]))
         return lambda q: np.column_stack([m.predict(q) for m in models])
     return _scaled(fit)
 
@@ -146,20 +153,23 @@ LEARNERS: dict[str, LearnerKind] = {
     "gp-each": LearnerKind("one scikit-learn GP per target, each its own Matern 5/2 ARD kernel",
                            lambda o: gp_each(o["seed"], o["restarts"], o["lead"]), capped=True,
                            notes=("restarts", "lead")),
-    "lgbm": LearnerKind("LightGBM, one booster per target", lambda o: lgbm(o["seed"], o["trees"]),
+    "lgbm": LearnerKind("LightGBM, one booster per target",
+                        lambda o: lgbm(o["seed"], o["trees"], o["workers"]),
                         notes=("trees",), needs="lightgbm"),
 }
 
 
 def make(name: str, seed: int, *, gp_rows: int | None = None, restarts: int = 1,
-         lead: int = 4, trees: int = 3000) -> Learner:
-    """The learner called ``name`` (:data:`LEARNERS`); GPs capped at ``gp_rows`` rows."""
+         lead: int = 4, trees: int = 3000, workers: int = 1) -> Learner:
+    """The learner called ``name`` (:data:`LEARNERS`); GPs capped at ``gp_rows`` rows;
+    ``workers`` processes fit LightGBM's boosters."""
     if name not in LEARNERS:
         raise ValueError(f"learner {name!r}: allowed {', '.join(LEARNERS)}")
     kind = LEARNERS[name]
     if kind.needs is not None and not importable(kind.needs):
         raise ValueError(f"learner {name} needs the {kind.needs} package (pip install "
                          "'hapticrom[bench]')")
-    options = {"seed": seed, "restarts": restarts, "lead": lead, "trees": trees}
+    options = {"seed": seed, "restarts": restarts, "lead": lead, "trees": trees,
+               "workers": workers}
     return Learner(name, kind.build(options), gp_rows if kind.capped else None,
                    {k: options[k] for k in kind.notes})

@@ -72,7 +72,8 @@ def double_matmuls_as_gemm(model: onnx.ModelProto) -> onnx.ModelProto:
     """``model`` with every float64 MatMul of a 2-D activation by a 2-D constant rewritten as
     Gemm with the constant stored transposed (``transB = 1``): the same products, but
     onnxruntime runs float64 MatMul through a slower path than float64 Gemm (at one design the
-    sweep GP's K* @ alpha took 1.9x as long; its float32 MatMul is fast and is left alone).
+    sweep GP's kernel and K* @ alpha over 6,636 designs took 1.7x as long,
+    ``bench/runtime/gp_dtype_cost.py``; float32 MatMul is fast and is left alone).
     A node whose activation's rank is not known from shape inference is left alone too."""
     inferred = onnx.shape_inference.infer_shapes(model)
     rank = {v.name: len(v.type.tensor_type.shape.dim)

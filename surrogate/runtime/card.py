@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import stat
 from collections.abc import Mapping
 from pathlib import Path
@@ -35,8 +36,7 @@ from fieldspec.errors import FieldError
 
 __all__ = ["CARD_NAME", "DIGEST_KEY", "FORMAT", "MAX_MODEL_FILE_BYTES", "REQUIRED_KEYS",
            "ModelFileError", "canonical_json", "card_digest", "read_card", "read_model_file",
-           "seal_card",
-           "sha256_bytes", "sha256_file", "verify_model_dir"]
+           "replace_card", "seal_card", "sha256_bytes", "sha256_file", "verify_model_dir"]
 
 CARD_NAME = "card.json"
 FORMAT = "hapticrom-model"
@@ -78,6 +78,42 @@ def seal_card(card: Mapping[str, Any]) -> dict[str, Any]:
     out = {k: v for k, v in card.items() if k != DIGEST_KEY}
     out[DIGEST_KEY] = card_digest(out)
     return out
+
+
+def replace_card(path: str | Path, card: Mapping[str, Any]) -> dict[str, Any]:
+    """Replace the card of the verified model directory ``path`` with ``card``, sealed
+    (:func:`seal_card`), atomically: written to a temporary sibling of the directory, flushed
+    to disk, renamed over ``card.json`` (a reader sees the old card or the new one, never half
+    of one), then the directory verified again (:func:`verify_model_dir`). The model files are
+    not touched, so ``card`` must list the same ``files``. Returns the sealed card. The one
+    writer of an existing card (``hapticrom models calibrate-intervals``, and the error model
+    of ``bench/calibration/calibrate.py --write-card``)."""
+    root = Path(path)
+    old = verify_model_dir(root)
+    if card.get("files") != old["files"]:
+        raise ModelFileError("files", f"{root / CARD_NAME}: the new card lists other files "
+                             "than the directory holds; only a card's entries may change here")
+    sealed = seal_card(card)
+    tmp = root.parent / f".{root.name}.{CARD_NAME}.tmp"
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(json.dumps(sealed, indent=1) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, root / CARD_NAME)
+    finally:
+        tmp.unlink(missing_ok=True)
+    try:  # the rename itself reaches the disk with the directory's entry
+        fd = os.open(root, os.O_RDONLY)
+    except OSError:  # pragma: no cover - a platform without directory handles
+        pass
+    else:
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    verify_model_dir(root)
+    return sealed
 
 
 def sha256_bytes(data: bytes) -> str:

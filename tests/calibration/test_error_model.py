@@ -1,11 +1,15 @@
 """The surrogate's error model across frequency: the profile and frequency kernels, the
 clusters of frequencies that share one mixing variable, the scale per frequency, the
-likelihood over clusters against the closed-form t per cluster (and its normalisation), and
-the estimator of a scale per frequency (bench/calibration/error_model.py) on synthetic errors."""
+likelihood over clusters against the closed-form t per cluster (and its normalisation), the
+estimator of a scale per frequency (bench/calibration/error_model.py) on synthetic errors, and
+the model card's own t (``calibration_error_t``): what the fit applies, the fallback without
+it, and the bench's writer (round trip, refusals)."""
 
 from __future__ import annotations
 
+import json
 import math
+import shutil
 import sys
 from pathlib import Path
 
@@ -13,10 +17,11 @@ import numpy as np
 import pytest
 
 from calibration.fit import (
+    CARD_ERROR_KEY,
     SCALE_HZ,
     SURROGATE_ERROR_T,
-    SURROGATE_ERROR_T_BY_MODEL,
     calibrate,
+    check_error_t,
     error_settings,
     point_scales,
     surrogate_error_t,
@@ -31,9 +36,10 @@ from calibration.likelihood import (
 from calibration.measurement import measurement_from_rows
 from calibration.synthetic import REFERENCE_DESIGNS
 from surrogate.runtime import load_predictor
+from surrogate.runtime.card import ModelFileError, card_digest, replace_card, verify_model_dir
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench" / "calibration"))
-from error_model import fit_t_per_frequency
+from error_model import error_t_entry, fit_t_per_frequency, select_outputs, write_error_t
 
 DESIGN = REFERENCE_DESIGNS["bare motor"]
 
@@ -93,37 +99,167 @@ def test_error_correlation_and_blocks_follow_the_clusters():
     assert np.all(point_scales(fwd, {"profile_um": g}, 1.5) == 1.5)
 
 
-def test_a_model_measured_on_its_own_gets_its_own_t():
-    """nn-sweep's t (measured on it, SURROGATE_ERROR_T_BY_MODEL) for nn-sweep; every other
-    model, and an output it does not list, the t of SURROGATE_ERROR_T."""
-    own = SURROGATE_ERROR_T_BY_MODEL["nn-sweep"]
-    for o in ("center_amplitude_um", "profile_um"):
-        assert surrogate_error_t(o, "nn-sweep") is own[o]
-        assert surrogate_error_t(o, "nn-default") is SURROGATE_ERROR_T[o]
-        assert surrogate_error_t(o) is SURROGATE_ERROR_T[o]
-        assert len(own[o]["scale"]) == len(SCALE_HZ)
-    assert surrogate_error_t("profile_normal_um", "nn-sweep") is SURROGATE_ERROR_T[
-        "profile_normal_um"]
-    e = error_settings("profile_um", True, 1.0, model="nn-sweep")
-    assert e["nu"] == own["profile_um"]["nu"] and e["length_mm"] == own["profile_um"]["length_mm"]
-    assert e["scale"] == tuple(own["profile_um"]["scale"])
-    assert error_settings("profile_um", False, 1.5, model="nn-sweep")["nu"] is None
+#: a measured t unlike SURROGATE_ERROR_T's in every value (a coarser scale grid, too)
+OWN_PROFILE = {"nu": 3.33, "scale": [2.0, 3.0, 4.0], "frequency_hz": 11.1,
+               "shared_within_hz": 0.0, "length_mm": 5.5}
 
 
-def test_calibrate_applies_the_t_of_the_model_by_its_name():
-    """The fit picks the t by the card's name: the same predictor renamed nn-sweep gets
-    nn-sweep's t (a short chain; the error model, not the posterior, is checked)."""
+def _entry(card, **outputs):
+    """A card entry for the model of ``card`` holding ``outputs`` (output: t)."""
+    return {"outputs": outputs or {"profile_um": OWN_PROFILE}, "scale_hz": [100.0, 150.0, 250.0],
+            "graph_sha256": card["files"][card["graph"]["file"]],
+            "measured_on": {"dataset": "datasets/default-sweep-test",
+                            "manifest_sha256": "0" * 64, "designs": "all", "n_designs": 512},
+            "command": "python bench/calibration/calibrate.py --sweep-error ... --write-card",
+            "measured": "2026-11-28T10:00:00Z"}
+
+
+def test_the_card_s_own_t_is_what_the_fit_uses():
+    """A card with its own t (calibration_error_t): calibrate applies it to the outputs it
+    lists (nu, lengths, clusters, the scale on its own frequency grid) and SURROGATE_ERROR_T
+    to the others; the t follows the card, not the card's name (a short chain; the error
+    model, not the posterior, is checked)."""
     p = load_predictor("models/nn-default")
-    m = measurement_from_rows([_row("edge", 2, 150), _row("edge", 6, 150)], design=DESIGN)
+    m = measurement_from_rows([_row("edge", 2, 125), _row("edge", 6, 125),
+                               _row("centre", 0, 125)], design=DESIGN)
     fit = ["skin_E_kPa"]
     fixed = {"fat_thickness_mm": 10.0, "tissue_loss_factor": 0.2}
+    p.card = {**p.card, CARD_ERROR_KEY: _entry(p.card)}
+    b = calibrate(p, m, fit, fixed=fixed, walkers=8, steps=20, burn=10, n_init=64)
+    e = b.error_model["profile_um"]
+    assert (e["nu"], e["length_mm"], e["frequency_hz"], e["shared_within_hz"]) == (
+        3.33, 5.5, 11.1, 0.0)
+    assert e["source"] == "model card" and e["scale_hz"] == (100.0, 150.0, 250.0)
+    # 125 Hz: half way between the entry's 2.0 at 100 Hz and 3.0 at 150 Hz
+    np.testing.assert_allclose(b.point_scale[:2], 2.5)
+    face = b.error_model["center_amplitude_um"]
+    assert face["source"] == "SURROGATE_ERROR_T"
+    assert face["nu"] == SURROGATE_ERROR_T["center_amplitude_um"]["nu"]
+    # the name no longer picks a t: nn-sweep's name on a card without the entry is generic
+    p.card = {k: v for k, v in p.card.items() if k != CARD_ERROR_KEY} | {"name": "nn-sweep"}
     a = calibrate(p, m, fit, fixed=fixed, walkers=8, steps=20, burn=10, n_init=64)
     assert a.error_model["profile_um"]["nu"] == SURROGATE_ERROR_T["profile_um"]["nu"]
-    p.card = {**p.card, "name": "nn-sweep"}
-    b = calibrate(p, m, fit, fixed=fixed, walkers=8, steps=20, burn=10, n_init=64)
-    want = SURROGATE_ERROR_T_BY_MODEL["nn-sweep"]["profile_um"]
-    assert b.error_model["profile_um"]["nu"] == want["nu"]
-    assert b.error_model["profile_um"]["length_mm"] == want["length_mm"]
+    assert a.error_model["profile_um"]["source"] == "SURROGATE_ERROR_T"
+
+
+def test_a_card_without_its_own_t_falls_back_to_the_generic_one():
+    card = load_predictor("models/nn-default").card
+    assert CARD_ERROR_KEY not in card
+    for o in ("center_amplitude_um", "profile_um", "profile_normal_um"):
+        for c in (card, None):
+            t = surrogate_error_t(o, c)
+            assert t["source"] == "SURROGATE_ERROR_T" and t["nu"] == SURROGATE_ERROR_T[o]["nu"]
+            assert t["scale"] == tuple(SURROGATE_ERROR_T[o]["scale"]) and t["scale_hz"] == SCALE_HZ
+    # an output the card's t does not list: the generic one; an output in neither: None
+    own = {**card, CARD_ERROR_KEY: _entry(card)}
+    assert surrogate_error_t("profile_um", own)["nu"] == OWN_PROFILE["nu"]
+    assert surrogate_error_t("center_amplitude_um", own)["source"] == "SURROGATE_ERROR_T"
+    assert surrogate_error_t("edge_amplitude_um", own) is None
+    assert error_settings("profile_um", False, 1.5, card=own)["nu"] is None  # the Gaussian
+
+
+def test_a_card_s_t_measured_on_another_graph_is_refused():
+    """An entry whose graph digest is not this card's graph (the model retrained, the entry
+    carried over): refused with the key and the reason, never applied."""
+    card = load_predictor("models/nn-default").card
+    stale = {**card, CARD_ERROR_KEY: {**_entry(card), "graph_sha256": "f" * 64}}
+    with pytest.raises(ModelFileError, match=r"graph_sha256.*measured on another model") as err:
+        surrogate_error_t("profile_um", stale)
+    assert err.value.field == f"{CARD_ERROR_KEY}.graph_sha256"
+
+
+@pytest.fixture
+def model_copy(tmp_path):
+    dest = tmp_path / "nn-default"
+    shutil.copytree("models/nn-default", dest)
+    return dest
+
+
+def test_the_bench_writer_round_trips_through_the_card(model_copy):
+    """bench/calibration/error_model.py's writer: the entry lands in the card under
+    calibration_error_t, every other key unchanged, the card re-sealed (the directory
+    verifies), and the calibration reads back what was measured."""
+    before = verify_model_dir(model_copy)
+    p = load_predictor(model_copy)
+    fitted = {"outputs": {"profile_um": OWN_PROFILE,
+                          "center_amplitude_um": {"nu": 2.5, "scale": [1.0, 1.1, 1.2],
+                                                  "frequency_hz": 20.0,
+                                                  "shared_within_hz": 40.0}},
+              "scale_hz": [100.0, 150.0, 250.0], "n_designs": 512,
+              "frequencies_hz": [100.0, 150.0, 250.0], "profile_mm": [0.0, 2.0]}
+    entry = error_t_entry(p, fitted, Path("datasets/default-sweep-test"), None, "the command")
+    assert entry["measured_on"]["dataset"] == "datasets/default-sweep-test"
+    assert entry["measured_on"]["n_designs"] == 512 and entry["command"] == "the command"
+    write_error_t(model_copy, entry)
+    after = verify_model_dir(model_copy)  # sealed: card_sha256 matches the new content
+    assert after[CARD_ERROR_KEY] == json.loads(json.dumps(entry))
+    assert {k: v for k, v in after.items() if k not in (CARD_ERROR_KEY, "card_sha256")} \
+        == {k: v for k, v in before.items() if k != "card_sha256"}
+    assert after["card_sha256"] == card_digest(after) != before["card_sha256"]
+    t = surrogate_error_t("profile_um", load_predictor(model_copy).card)
+    assert t["source"] == "model card" and t["nu"] == 3.33 and t["scale"] == (2.0, 3.0, 4.0)
+    assert not list(model_copy.parent.glob(".*tmp"))  # no temporary file left behind
+
+
+def test_only_the_outputs_asked_for_are_written():
+    """--write-outputs: a measured output left out keeps SURROGATE_ERROR_T; one not measured,
+    or none, is refused naming what was measured."""
+    measured = {"outputs": {"center_amplitude_um": {"nu": 2.5}, "profile_um": OWN_PROFILE},
+                "n_designs": 512}
+    assert select_outputs(measured, None) is measured
+    got = select_outputs(measured, "profile_um")
+    assert list(got["outputs"]) == ["profile_um"] and got["n_designs"] == 512
+    assert list(measured["outputs"]) == ["center_amplitude_um", "profile_um"]  # not changed
+    for names in ("profile_normal_um", " , "):
+        with pytest.raises(ValueError, match="measured: center_amplitude_um, profile_um"):
+            select_outputs(measured, names)
+
+
+BAD = {
+    "scale of the wrong length": (lambda e: e["outputs"]["profile_um"].update(scale=[1.0]),
+                                  "outputs.profile_um.scale: must be 3 numbers > 0"),
+    "negative nu": (lambda e: e["outputs"]["profile_um"].update(nu=-1.0),
+                    "outputs.profile_um.nu: -1.0: must be a finite number > 0"),
+    "no length along the profile": (lambda e: e["outputs"]["profile_um"].pop("length_mm"),
+                                    "outputs.profile_um.length_mm: None"),
+    "not an output of the model": (
+        lambda e: e["outputs"].update(profile_normal_um=dict(OWN_PROFILE)),
+        "outputs.profile_normal_um: not an output of the model"),
+    "frequencies not increasing": (lambda e: e.update(scale_hz=[100.0, 100.0, 250.0]),
+                                   "scale_hz: [100.0, 100.0, 250.0]: must be frequencies"),
+    "no provenance": (lambda e: e.pop("measured_on"), "measured_on: must name the dataset"),
+    "no frequency length (NaN)": (
+        lambda e: e["outputs"]["profile_um"].update(frequency_hz=float("nan")),
+        "outputs.profile_um.frequency_hz: nan"),
+    "another model's graph": (lambda e: e.update(graph_sha256="0" * 64),
+                              "measured on another model"),
+}
+
+
+@pytest.mark.parametrize("damage", BAD)
+def test_the_bench_writer_refuses_a_bad_entry_and_writes_nothing(model_copy, damage):
+    card = verify_model_dir(model_copy)
+    raw = (model_copy / "card.json").read_bytes()
+    entry = json.loads(json.dumps(_entry(card)))
+    how, message = BAD[damage]
+    how(entry)
+    with pytest.raises(ModelFileError) as err:
+        write_error_t(model_copy, entry)
+    assert message in str(err.value) and CARD_ERROR_KEY in str(err.value)
+    assert "--write-card" in str(err.value)  # says how to make a good one
+    assert (model_copy / "card.json").read_bytes() == raw
+    with pytest.raises(ModelFileError):
+        check_error_t(entry, card)
+
+
+def test_replace_card_keeps_the_model_files_and_refuses_a_damaged_directory(model_copy):
+    card = verify_model_dir(model_copy)
+    with pytest.raises(ModelFileError, match="other files"):
+        replace_card(model_copy, {**card, "files": {**card["files"], "x.onnx": "0" * 64}})
+    (model_copy / "model.onnx").write_bytes(b"changed")
+    with pytest.raises(ModelFileError, match="file digest"):
+        replace_card(model_copy, {**card, CARD_ERROR_KEY: _entry(card)})
+    assert CARD_ERROR_KEY not in json.loads((model_copy / "card.json").read_text())
 
 
 def test_scale_between_grid_frequencies_is_interpolated():

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from calibration.fit import SURROGATE_ERROR_T, calibrate
+from calibration.fit import calibrate, surrogate_error_t
 from calibration.forward import ForwardModel
 from calibration.likelihood import mixture_log_likelihood
 from calibration.measurement import MeasurementError, measurement_from_rows, read_measurement
@@ -108,7 +108,8 @@ def test_rows_without_a_normal_output_are_refused_by_name(normal):
 
 def test_calibrate_picks_the_default_normal_model_for_an_ldv_measurement(tmp_path, capsys):
     """nn-normal, or nn-sweep once trained with the normal component (the defaults)."""
-    name = read_card(default_model("normal"))["name"]
+    card = read_card(default_model("normal"))
+    name = card["name"]
     out = tmp_path / "cal.json"
     assert main(["calibrate", LDV, "--fit", FIT3, *QUICK, "--out", str(out),
                  "--plot", str(tmp_path / "cal.png"), "--verify"]) == 0
@@ -117,7 +118,7 @@ def test_calibrate_picks_the_default_normal_model_for_an_ldv_measurement(tmp_pat
     assert problems(doc, schema("calibration")) == []
     assert doc["model"]["name"] == name
     assert doc["likelihood"]["error_length_mm"] == {
-        "profile_normal_um": SURROGATE_ERROR_T["profile_normal_um"]["length_mm"]}
+        "profile_normal_um": surrogate_error_t("profile_normal_um", card)["length_mm"]}
     err = doc["likelihood"]["surrogate_error"]["profile_normal_um"]
     # the example measures at 120 and 170 Hz: one mixing variable each, its scale per frequency
     assert err["profile_kernel"] == "matern32" and err["shared_within_hz"] < 50.0

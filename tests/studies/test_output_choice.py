@@ -145,3 +145,14 @@ def test_pole_residue_choice_decodes_its_own_targets():
     got, truth = choice.decode(y, sw), Answers.of(sw)
     assert np.allclose(got.center, truth.center, rtol=1e-6)
     assert np.allclose(got.edge, truth.edge, rtol=1e-6) and got.profile is None
+
+
+@pytest.mark.skipif(not learners.lightgbm_available(), reason="needs the bench extra")
+def test_lightgbm_boosters_do_not_depend_on_the_workers_fitting_them():
+    rng = np.random.default_rng(0)
+    x = rng.random((60, 3))
+    y = np.column_stack([np.sin(3 * x[:, 0]) + x[:, 1], x[:, 2] ** 2, x.sum(axis=1)])
+    one = learners.lgbm(0, trees=20, workers=1)(x, y)
+    two = learners.lgbm(0, trees=20, workers=2)(x, y)
+    np.testing.assert_array_equal(one(x), two(x))
+    assert learners.make("lgbm", 0, trees=20, workers=2).notes == {"trees": 20}

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from synthetic import make_dataset
 
-from surrogate.calibrate_intervals import _write_card, calibrate_model_dir
+from surrogate.calibrate_intervals import calibrate_model_dir
 from surrogate.intervals import Z95, calibrate, conformal_quantile, coverage
 from surrogate.runtime import ModelFileError, PredictorInputError, load_predictor
-from surrogate.runtime.card import verify_model_dir
+from surrogate.runtime.card import replace_card, verify_model_dir
 from surrogate.runtime.predictor import CALIBRATION_KEY, CHUNK_ROWS
 
 
@@ -96,7 +96,7 @@ def test_predictor_applies_the_cards_scale(model_copy):
     card = verify_model_dir(model_copy)
     k = 3 + len(card["profile_distance_mm"])
     scale = np.linspace(1.5, 2.5, k)
-    _write_card(model_copy, {**card, CALIBRATION_KEY: {"log_std_scale": scale.tolist()}})
+    replace_card(model_copy, {**card, CALIBRATION_KEY: {"log_std_scale": scale.tolist()}})
     p = load_predictor(model_copy)
     for X in (X4, X4[:1]):  # batch path and the one-design path
         got, ref = p.predict(X), load_predictor(model_copy, calibrated=False).predict(X)
@@ -110,7 +110,7 @@ def test_predictor_applies_the_cards_scale(model_copy):
     np.testing.assert_array_equal(raw["profile_um_log_std"],
                                   load_predictor(model_copy, calibrated=False)
                                   .predict(X4)["profile_um_log_std"])
-    _write_card(model_copy, {**card, CALIBRATION_KEY: {"log_std_scale": [1.0, -1.0]}})
+    replace_card(model_copy, {**card, CALIBRATION_KEY: {"log_std_scale": [1.0, -1.0]}})
     with pytest.raises(ModelFileError, match="log_std_scale") as err:
         load_predictor(model_copy)
     assert err.value.field == CALIBRATION_KEY
