@@ -9,9 +9,11 @@ sensor: the displacement magnitude, at the unit's face or not) and ``normal`` (a
 normal component |u_z|, on the skin around the unit only) -- each at 5 % and at 10 % noise,
 with a layout of 5-10 points (distances from the edge on the 1 mm grid) at each of its
 frequencies, then calibrated for skin_E_kPa, fat_thickness_mm and tissue_loss_factor with the
-defaults of ``hapticrom calibrate`` and the model it picks (nn-default for the magnitude,
-nn-normal for the normal component). Printed per sensor kind and input: how often the 95 %
-interval holds the true value (all calibrations, and those where the input is reported as
+defaults of ``hapticrom calibrate`` on nn-default (magnitude) and nn-normal (normal component),
+the models calibrate picked when the study was first run, or on ``--model`` (the shipped sweep
+defaults: ``--sensors magnitude --model models/nn-sweep`` and ``--sensors normal --model
+models/nn-sweep-normal``, docs/calibration.md). Printed per sensor kind and input: how often
+the 95 % interval holds the true value (all calibrations, and those where the input is reported as
 determined), how often it is determined, the median absolute error of the posterior mean, and
 the run time per calibration. Everything is seeded.
 """
@@ -46,7 +48,8 @@ from surrogate.runtime import load_predictor
 
 ROOT = Path(__file__).resolve().parents[2]
 CACHE = ROOT / "bench" / "calibration" / "data" / "calibration-subjects.json"
-#: sensor kind (the component it sees) -> the model hapticrom calibrate picks for it
+#: sensor kind (the component it sees) -> the model the study runs without --model (the
+#: single-frequency ones calibrate picked when it was first run; it now picks the sweep models)
 MODELS = {"magnitude": ROOT / "models" / "nn-default", "normal": ROOT / "models" / "nn-normal"}
 #: other FE subjects (bench/calibration/subjects.py --n 30 --seed 7 --out THIS): the surrogate's
 #: error structure is measured on these, not on the study's subjects
