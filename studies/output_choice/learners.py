@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from joblib import Parallel, delayed
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 from sklearn.neural_network import MLPRegressor
@@ -118,7 +119,6 @@ def lgbm(seed: int, trees: int = 3000,
     def fit(x: np.ndarray, y: np.ndarray) -> Predict:
         # optional (the `bench` extra): only the LightGBM peer needs it
         import lightgbm
-        from joblib import Parallel, delayed
 
         def booster(j: int) -> Any:
             return lightgbm.LGBMRegressor(
