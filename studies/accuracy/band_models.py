@@ -27,8 +27,10 @@ one call with every test design divided by their number (batched); one thread. T
 time per design is the solver time the test dataset recorded for those designs (``wall_s``,
 one core each, the generation's two workers beside other jobs).
 
-LightGBM, the other peer, is left to docs/peers.md: on the complex band its fit alone took
-25 minutes there.
+* the LightGBM peer of the same study (its ``lgbm`` learner, one booster of 3,000 trees per
+  target, on the same complex band; :data:`PEER_WORKERS` processes fit the boosters), fitted
+  on the same designs, when the ``bench`` extra has installed ``lightgbm`` (otherwise left
+  out, and the report says so).
 """
 
 from __future__ import annotations
@@ -55,9 +57,9 @@ from surrogate.sweep.targets import load_sweep_datasets, pair_rows
 
 from .timing import median_us, timed
 
-__all__ = ["LEAD", "MODES", "N_TEST_QUICK", "N_TRAIN_QUICK", "PROFILE_MODES", "ROLES", "SINGLE",
-           "TARGETS", "TEST", "TRAIN", "band_rows", "lead", "meets", "mlp_row", "model_row",
-           "shipped_models", "training_designs"]
+__all__ = ["LEAD", "MODES", "N_TEST_QUICK", "N_TRAIN_QUICK", "PEERS", "PEER_WORKERS",
+           "PROFILE_MODES", "ROLES", "SINGLE", "TARGETS", "TEST", "TRAIN", "band_rows", "lead",
+           "meets", "model_row", "peer_row", "peers", "shipped_models", "training_designs"]
 
 _DATASETS = Path(__file__).resolve().parents[2] / "datasets"
 #: The sweep training set and the fresh test designs.
@@ -68,6 +70,10 @@ N_TRAIN_QUICK = 256
 #: POD modes of the peer's complex band (centre + edge, profile): those of docs/peers.md.
 MODES = 48
 PROFILE_MODES = 24
+#: The peers (``studies.output_choice`` learners on the complex band) -> their label.
+PEERS = {"mlp": "scikit-learn MLP 3x128", "lgbm": "LightGBM, 3,000 trees a target"}
+#: Processes fitting LightGBM's per-target boosters (the boosters do not depend on it).
+PEER_WORKERS = 2
 #: The roles whose shipped defaults are scored, then the single-frequency model.
 ROLES = ("harmonic", "gaussian_process")
 SINGLE = "nn-default"
@@ -141,12 +147,19 @@ def model_row(label: str, path: Path, test: Any, designs: np.ndarray, repeat: in
                 trained=trained, fitted=int(card.get("training", {}).get("rows", 0)))
 
 
-def mlp_row(train: Path, test: Path, n_train: int, truth: tuple[np.ndarray, ...], n_test: int,
-            repeat: int, seed: int = 0) -> dict[str, Any]:
-    """Fit the MLP peer (:mod:`studies.output_choice`: ``mlp`` on the complex band) on the
-    first ``n_train`` designs of ``train``; score and time it on the first ``n_test`` designs
-    of ``test`` against ``truth`` (their pairs' centre, profile and grid, as
-    :func:`model_row` scores them), one BLAS thread."""
+def peers() -> list[str]:
+    """The peers this machine can fit: the MLP, and LightGBM when ``lightgbm`` imports."""
+    return [p for p in PEERS if p != "lgbm" or oc_learners.lightgbm_available()]
+
+
+def peer_row(learner: str, train: Path, test: Path, n_train: int,
+             truth: tuple[np.ndarray, ...], n_test: int, repeat: int,
+             seed: int = 0) -> dict[str, Any]:
+    """Fit the peer ``learner`` (:data:`PEERS`; :mod:`studies.output_choice` on the complex
+    band) on the first ``n_train`` designs of ``train``; score and time it on the first
+    ``n_test`` designs of ``test`` against ``truth`` (their pairs' centre, profile and grid, as
+    :func:`model_row` scores them), one BLAS thread (LightGBM's boosters fitted by
+    :data:`PEER_WORKERS` processes, its answers timed on one)."""
     with threadpool_limits(1), warnings.catch_warnings():
         warnings.filterwarnings("ignore", module="sklearn")
         tr, specs = oc_data.load(str(train), limit=n_train)
@@ -156,7 +169,7 @@ def mlp_row(train: Path, test: Path, n_train: int, truth: tuple[np.ndarray, ...]
         choice = ComplexBand(MODES, PROFILE_MODES)
         t0 = time.perf_counter()
         x, y = choice.training(tr, np.random.default_rng(seed))
-        model = oc_learners.make("mlp", seed).fit(x, y)
+        model = oc_learners.make(learner, seed, workers=PEER_WORKERS).fit(x, y)
         fit_s = time.perf_counter() - t0
 
         def answer(sw: oc_data.Sweeps) -> dict[str, np.ndarray]:
@@ -173,8 +186,8 @@ def mlp_row(train: Path, test: Path, n_train: int, truth: tuple[np.ndarray, ...]
             return answer(one)
 
         t1 = median_us(single, _calls(single), repeat=3) * 1e-6
-    name = f"scikit-learn MLP 3x128, complex band ({MODES} + {PROFILE_MODES} modes)"
-    return _row(name, score_pairs(pred, *truth), t1, tb / len(te), len(te), model="mlp",
+    name = f"{PEERS[learner]}, complex band ({MODES} + {PROFILE_MODES} modes)"
+    return _row(name, score_pairs(pred, *truth), t1, tb / len(te), len(te), model=learner,
                 role="peer", trained=f"{len(tr):,} designs of {train.name}", fitted=len(tr),
                 fit_s=fit_s)
 
@@ -193,12 +206,13 @@ def lead(row: dict[str, Any], peer: dict[str, Any]) -> dict[str, float]:
 
 def band_rows(n_test: int | None, n_train: int | None, *, train: Path = TRAIN,
               test: Path = TEST, models: Sequence[tuple[str, Path]] | None = None,
-              repeat: int = 3, log: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
-    """Every row of the section (the Predictor models, then the MLP peer), the FE sweep's
+              repeat: int = 3, log: Callable[[str], None] = lambda m: None,
+              peer_learners: Sequence[str] | None = None) -> dict[str, Any]:
+    """Every row of the section (the Predictor models, then the peers), the FE sweep's
     recorded time per design (``fe``; None when the test set recorded none), and what was
     used: ``n_test`` test designs (None: all), ``n_train`` peer training designs (None: what
     the card of the first of ``models`` records), ``models`` ((label, directory); None:
-    :func:`shipped_models`)."""
+    :func:`shipped_models`), ``peer_learners`` (None: :func:`peers`)."""
     t0 = time.perf_counter()
     models = list(models) if models is not None else shipped_models()
     first = models[0][1]
@@ -212,8 +226,10 @@ def band_rows(n_test: int | None, n_train: int | None, *, train: Path = TRAIN,
         rows.append(model_row(label, path, data, designs, repeat))
         log(f"whole band: {path.name} scored ({time.perf_counter() - t0:.0f} s)")
     _, centre, profile, _ = pair_rows(data, designs)
-    rows.append(mlp_row(train, test, n_train, (centre, profile, data.grid_mm), n, repeat))
-    log(f"whole band: MLP peer fitted and scored ({time.perf_counter() - t0:.0f} s)")
+    for learner in peers() if peer_learners is None else peer_learners:
+        rows.append(peer_row(learner, train, test, n_train, (centre, profile, data.grid_mm), n,
+                             repeat))
+        log(f"whole band: {learner} peer fitted and scored ({time.perf_counter() - t0:.0f} s)")
     df = Store.open(test).read(columns=["sample_index", "status", "wall_s"])
     df = df[df["status"] == "ok"].sort_values("sample_index", kind="stable")
     wall = df["wall_s"].to_numpy(float)[:n]

@@ -98,9 +98,10 @@ def test_quick_study_numbers_are_finite_and_consistent(result):
     for r in (*result["gp_curve"], *result["nn_curve"]):
         assert r["total_s"] == pytest.approx(r["generation_s"] + r["train_s"])
         assert 0 < r["worst_median"] <= r["worst_p95"]
-    band = result["band"]  # the shipped sweep models, nn-default and the MLP peer, CI-sized
+    band = result["band"]  # the shipped sweep models, nn-default and the peers, CI-sized
     assert [r["role"] for r in band["rows"]] == ["harmonic", "gaussian_process",
-                                                 "single frequency", "peer"]
+                                                 "single frequency",
+                                                 *["peer"] * len(band_models.peers())]
     assert band["n_test"] == band_models.N_TEST_QUICK
     assert band["rows"][-1]["fitted"] == band_models.N_TRAIN_QUICK
     for r in band["rows"]:
@@ -118,7 +119,8 @@ def test_band_section_on_the_synthetic_sweeps(sweep_dataset, sweep_model, tmp_pa
 
     test = make_dataset(tmp_path / "test", 6, seed=777)
     band = band_models.band_rows(None, None, train=sweep_dataset, test=test,
-                                 models=[("harmonic", sweep_model)], repeat=1)
+                                 models=[("harmonic", sweep_model)], repeat=1,
+                                 peer_learners=["mlp"])
     model, peer = band["rows"]
     assert model["role"] == "harmonic" and peer["role"] == "peer"
     # the peer fits on every design the model's card records; every test design is scored
@@ -139,6 +141,19 @@ def test_band_section_on_the_synthetic_sweeps(sweep_dataset, sweep_model, tmp_pa
     assert "not recorded" in table and "nan" not in table
     # the rows the model fitted are its card's, not a fixed share of the recorded designs
     assert 0 < model["fitted"] < 48 and f"it fits on {model['fitted']:,} of them" in table
+    assert "LightGBM is not installed here" in table  # only the MLP was fitted
+    # a second peer with a smaller p95: the lead is over every peer, the smaller one, and
+    # both are named
+    other = {**peer, "model": "lgbm", "centre": [v / 2 for v in peer["centre"]],
+             "edge": [v / 2 for v in peer["edge"]]}
+    res = {"band": {**band, "rows": [model, peer, other]}}
+    finding = report._band_findings(res)[0]
+    mlp, lgbm = (band_models.lead(model, p) for p in (peer, other))
+    assert f"Its p95 lead over every peer trained on 48 designs: {lgbm['centre']:.2f}x " \
+           "centre" in finding
+    assert f"MLP {mlp['centre']:.2f}x / {mlp['edge']:.2f}x" in finding and "LightGBM" in finding
+    table = "\n".join(report._band_section(res))
+    assert "LightGBM is not installed" not in table and table.count("complex band (48") == 2
 
 
 @pytest.mark.slow
