@@ -70,8 +70,9 @@ N_TRAIN_QUICK = 256
 #: POD modes of the peer's complex band (centre + edge, profile): those of docs/peers.md.
 MODES = 48
 PROFILE_MODES = 24
-#: The peers (``studies.output_choice`` learners on the complex band) -> their label.
-PEERS = {"mlp": "scikit-learn MLP 3x128", "lgbm": "LightGBM, 3,000 trees a target"}
+#: The peers: (``studies.output_choice`` learner on the complex band, short name, label).
+PEERS = (("mlp", "MLP", "scikit-learn MLP 3x128"),
+         ("lgbm", "LightGBM", "LightGBM, 3,000 trees a target"))
 #: Processes fitting LightGBM's per-target boosters (the boosters do not depend on it).
 PEER_WORKERS = 2
 #: The roles whose shipped defaults are scored, then the single-frequency model.
@@ -148,8 +149,11 @@ def model_row(label: str, path: Path, test: Any, designs: np.ndarray, repeat: in
 
 
 def peers() -> list[str]:
-    """The peers this machine can fit: the MLP, and LightGBM when ``lightgbm`` imports."""
-    return [p for p in PEERS if p != "lgbm" or oc_learners.lightgbm_available()]
+    """The peers this machine can fit: those whose optional package (the MLP needs none,
+    LightGBM ``lightgbm``) imports."""
+    return [learner for learner, *_ in PEERS
+            if (need := oc_learners.LEARNERS[learner].needs) is None
+            or oc_learners.importable(need)]
 
 
 def peer_row(learner: str, train: Path, test: Path, n_train: int,
@@ -186,8 +190,10 @@ def peer_row(learner: str, train: Path, test: Path, n_train: int,
             return answer(one)
 
         t1 = median_us(single, _calls(single), repeat=3) * 1e-6
-    name = f"{PEERS[learner]}, complex band ({MODES} + {PROFILE_MODES} modes)"
+    short, label = next(p[1:] for p in PEERS if p[0] == learner)
+    name = f"{label}, complex band ({MODES} + {PROFILE_MODES} modes)"
     return _row(name, score_pairs(pred, *truth), t1, tb / len(te), len(te), model=learner,
+                short=short,
                 role="peer", trained=f"{len(tr):,} designs of {train.name}", fitted=len(tr),
                 fit_s=fit_s)
 

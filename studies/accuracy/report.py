@@ -23,9 +23,6 @@ __all__ = ["TARGET", "fastest_within", "machine", "pareto", "render", "write_plo
 #: The error the headline asks about: 1 % (the surrogate accuracy target of the README).
 TARGET = 0.01
 
-#: a peer's short name (its ``studies.output_choice`` learner) in the findings and the figure
-_PEER_NAMES = {"mlp": "MLP", "lgbm": "LightGBM"}
-
 
 def machine() -> dict[str, str]:
     """CPU model, cores, load, OS, Python and package versions of this run."""
@@ -128,7 +125,7 @@ def _band_panel(ax: Any, band: dict[str, Any]) -> None:
         c = figstyle.color(i)
         for t, fill in ((r["seconds_1"], c), (r["seconds_batch"], "none")):
             ax.plot([t, t], [r["centre"][0], r["centre"][1]], color=c, lw=0.8, alpha=0.6)
-            label = (f"{_PEER_NAMES[r['model']]} peer" if r["role"] == "peer"
+            label = (f"{r['short']} peer" if r["role"] == "peer"
                      else f"{r['model']} ({r['role']})")
             ax.plot(t, r["centre"][0], "o", color=c, mfc=fill, ms=6,
                     label=label if fill != "none" else None)
@@ -319,7 +316,7 @@ def _band_findings(res: dict[str, Any]) -> list[str]:
         verdict = ("meets all four targets" if len(met) == len(m) else
                    "meets none of the four targets" if not met else
                    f"meets {len(met)} of the four targets ({', '.join(met)})")
-        leads = {_PEER_NAMES[p["model"]]: lead(r, p) for p in peer_rows}
+        leads = {p["short"]: lead(r, p) for p in peer_rows}
         ld = {k: min(v[k] for v in leads.values()) for k in ("centre", "edge")}
         out.append(
             f"- Shipped {r['role']} model `{r['model']}` on {band['n_test']} fresh designs x "
@@ -357,7 +354,7 @@ def _band_section(res: dict[str, Any]) -> list[str]:
     fe = band["fe"]
     n_f = band["band_hz"][2]
     peer_rows = [r for r in band["rows"] if r["role"] == "peer"]
-    fits = ", ".join(f"{_PEER_NAMES[r['model']]} {_t(r['fit_s'])}" for r in peer_rows)
+    fits = ", ".join(f"{r['short']} {_t(r['fit_s'])}" for r in peer_rows)
     L = ["### The whole band, on fresh designs: the shipped models and the peers", "",
          f"{band['n_test']} of the {band['n_test_all']} designs of `datasets/{band['test']}` "
          f"(Sobol seed {band['test_seed']}, no model saw them), every band frequency "
@@ -408,7 +405,7 @@ def _band_section(res: dict[str, Any]) -> list[str]:
     L += ["", "Targets for the shipped harmonic model (issue 36): centre median < 1 %, p95 "
           "< 5 %, max error / field < 10 %, profile L2 median < 2 %, and a p95 lead of 2x over "
           "every peer trained on the same designs."
-          + ("" if any(r["model"] == "lgbm" for r in peer_rows) else
+          + ("" if "LightGBM" in {r["short"] for r in peer_rows} else
              " LightGBM is not installed here (the `bench` extra), so its row is left out; "
              "[docs/peers.md](peers.md#the-shipped-models-against-the-peers) has it."), ""]
     return L
