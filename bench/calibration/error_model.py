@@ -216,11 +216,6 @@ def sweep_design_indices(path: Path = SWEEP_DESIGNS_FILE) -> np.ndarray:
     return np.array([int(ln) for ln in lines], dtype=np.int64)
 
 
-def is_sweep_model(predictor) -> bool:
-    """Whether ``predictor`` was trained on a sweep dataset (its card's split is by design)."""
-    return predictor.card.get("training", {}).get("split") == "by design"
-
-
 def trained_on(predictor, path: Path) -> bool:
     """Whether ``predictor``'s card names the dataset ``path`` among its training data."""
     here = Path(path).resolve()
@@ -417,10 +412,11 @@ def fit_sweep_error(predictor, component: str, path: Path,
 
     from calibration.fit import card_error_t, surrogate_error_t
     from calibration.likelihood import mvt_logpdf, profile_kernel
+    from surrogate.runtime.defaults import is_sweep_model
 
     outputs = (("center_amplitude_um", "profile_um") if component == "magnitude" else
                ("profile_normal_um",))
-    sweep_model = is_sweep_model(predictor)
+    sweep_model = is_sweep_model(predictor.card)
     held = None if sweep_model else held_out_residuals(predictor.uncalibrated())
     grid = np.asarray(predictor.profile_distance_mm, dtype=float)
     f, dist, sweep = sweep_residuals(predictor, path, designs, max_mm)
@@ -544,14 +540,14 @@ def select_outputs(measured: dict[str, Any], names: str | None) -> dict[str, Any
 
 def write_error_t(model_dir: Path, entry: dict[str, Any]) -> dict[str, Any]:
     """Write ``entry`` as the :data:`calibration.fit.CARD_ERROR_KEY` of the card of
-    ``model_dir`` (replacing any earlier one; every other key unchanged): the directory
-    verified, the entry checked against the card (calibration.fit.check_error_t: a malformed
-    entry, or one measured on another graph, raises ModelFileError and nothing is written),
-    then the card re-sealed and replaced atomically (surrogate.runtime.card.replace_card).
-    Returns the new card."""
+    ``model_dir`` (replacing any earlier one; every other key unchanged): the entry checked
+    against the card (calibration.fit.check_error_t: a malformed entry, or one measured on
+    another graph, raises ModelFileError and nothing is written), then the card re-sealed and
+    replaced atomically (surrogate.runtime.card.replace_card, which verifies the directory
+    before and after). Returns the new card."""
     from calibration.fit import CARD_ERROR_KEY, check_error_t
-    from surrogate.runtime.card import replace_card, verify_model_dir
+    from surrogate.runtime.card import read_card, replace_card
 
-    card = verify_model_dir(model_dir)
+    card = read_card(model_dir, verify=False)  # replace_card verifies the directory
     check_error_t(entry, card)
     return replace_card(model_dir, {**card, CARD_ERROR_KEY: entry})
