@@ -5,8 +5,9 @@ like bench/runtime/predict.py (one thread, thread CPU time, medians of interleav
     .venv/bin/python bench/runtime/gp_dtype_cost.py [--designs 6500] [--rounds 15]
     .venv/bin/python bench/runtime/gp_dtype_cost.py --model models/gp-sweep
 
-The float64 graph is timed as written (MatMul) and as the export writes it (Gemm with the
-constant transposed: surrogate.estimators.export.double_matmuls_as_gemm). The graph is the
+The float64 graph is timed as written (MatMul), with the product as Gemm with the constant
+transposed (surrogate.estimators.export.double_matmuls_as_gemm), and as the export writes it:
+alpha the left operand, (alpha' @ K*')'. The graph is the
 kernel and mean of surrogate/sweep/gp_export.py (Matern 5/2 on 14 encoded features, its squared
 distances by the |x|^2 - 2 x.X + |X|^2 expansion) on random inputs: the arithmetic and shapes of
 the shipped graph's first part at the full dataset's size, not its values, so it says which
@@ -32,20 +33,25 @@ from surrogate.estimators.export import double_matmuls_as_gemm
 FEATURES, TARGETS = 14, 177  # the default sweep space's encoded design features; 1 + 48 + 128
 
 
-def kernel_mean_graph(n_designs: int, dtype: type) -> bytes:
-    """ONNX bytes: x (batch, FEATURES) -> K* @ alpha (batch, TARGETS) in ``dtype``."""
+def kernel_mean_graph(n_designs: int, dtype: type, alpha_left: bool = False) -> bytes:
+    """ONNX bytes: x (batch, FEATURES) -> K* @ alpha (batch, TARGETS) in ``dtype``
+    (``alpha_left``: as (alpha' @ K*')', alpha the left operand, as the export writes it)."""
     elem = TensorProto.DOUBLE if dtype == np.float64 else TensorProto.FLOAT
     rng = np.random.default_rng(0)
     consts = {"XT": rng.random((FEATURES, n_designs)), "Xsq": rng.random(n_designs),
               "alpha": rng.standard_normal((n_designs, TARGETS)), "two": np.array(2.0),
+              "alpha_T": rng.standard_normal((TARGETS, n_designs)),
               "five": np.array(5.0), "c53": np.array(5.0 / 3.0), "one": np.array(1.0)}
+    consts.pop("alpha" if alpha_left else "alpha_T")
     inits = [numpy_helper.from_array(v.astype(dtype), k) for k, v in consts.items()]
     steps = [("Mul", ["x", "x"], "xx"), ("ReduceSum", ["xx"], "xsq"), ("MatMul", ["x", "XT"], "xX"),
              ("Mul", ["xX", "two"], "xX2"), ("Sub", ["xsq", "xX2"], "a"),
              ("Add", ["a", "Xsq"], "d2r"), ("Relu", ["d2r"], "d2"), ("Mul", ["d2", "five"], "d5"),
              ("Sqrt", ["d5"], "r"), ("Mul", ["d2", "c53"], "q"), ("Add", ["r", "q"], "rq"),
              ("Add", ["rq", "one"], "p"), ("Neg", ["r"], "nr"), ("Exp", ["nr"], "e"),
-             ("Mul", ["p", "e"], "k"), ("MatMul", ["k", "alpha"], "y")]
+             ("Mul", ["p", "e"], "k")]
+    steps += ([("Transpose", ["k"], "kT"), ("MatMul", ["alpha_T", "kT"], "yT"),
+               ("Transpose", ["yT"], "y")] if alpha_left else [("MatMul", ["k", "alpha"], "y")])
     nodes = [helper.make_node(op, ins, [out], **({"keepdims": 1} if op == "ReduceSum" else {}))
              for op, ins, out in steps]
     graph = helper.make_graph(nodes, "gp_kernel_mean",
@@ -65,8 +71,10 @@ def float32_mean_error(model_dir: str, n: int = 2000) -> None:
     scaled POD coefficients) at ``n`` uniform designs and ``n`` designs 0.01 from fitted ones."""
     graph = onnx.load(f"{model_dir}/model.onnx")
     c = {i.name: numpy_helper.to_array(i) for i in graph.graph.initializer}
-    for name in ("alpha", "Xs_T"):  # stored transposed when the export wrote Gemm for MatMul
-        c.setdefault(name, c.get(f"{name}__T", np.empty((0, 0))).T)
+    for name in ("alpha", "Xs_T"):  # stored transposed: name__T (the Gemm rewrite), name_T
+        stored = [c[t] for t in (f"{name}__T", f"{name}_T") if t in c]   # (the export's alpha)
+        if name not in c and stored:
+            c[name] = stored[0].T
     alpha = c["alpha"]
 
     def mean(x: np.ndarray, dtype: type) -> tuple[np.ndarray, np.ndarray]:
@@ -105,10 +113,12 @@ def main() -> None:
         float32_mean_error(args.model)
         return
     runs = {}
-    for name, dtype, gemm in (("float64 MatMul", np.float64, False),
-                              ("float64 Gemm (as exported)", np.float64, True),
-                              ("float32", np.float32, False)):
-        graph = kernel_mean_graph(args.designs, dtype)
+    for name, dtype, gemm, left in (
+            ("float64 MatMul", np.float64, False, False),
+            ("float64 Gemm (K* @ alpha)", np.float64, True, False),
+            ("float64 alpha' @ K*' (as exported)", np.float64, True, True),
+            ("float32", np.float32, False, False)):
+        graph = kernel_mean_graph(args.designs, dtype, left)
         if gemm:
             graph = double_matmuls_as_gemm(onnx.load_from_string(graph)).SerializeToString()
         s = session(graph)

@@ -25,8 +25,9 @@ FLOP-bound time at batch 10,000: the graph's FLOPs per row are counted from the 
 1 and 2 with every product's operands exposed; a product (..., n, k) @ (..., k, m) costs
 2 * (batch dims) * n * k * m FLOPs, and the per-row count is the difference, so a gather of
 one grid point of a table counts that point, not the table). The rate is numpy's on the
-graph's dense matmuls, those whose second operand is an initializer ``W`` of shape
-(..., k, m): A of shape (..., 10000, k) in the graph's dtype, one thread, thread CPU time,
+graph's dense matmuls, those with an initializer operand ``W`` (MatMul or Gemm, on either
+side; W of shape (..., k, m) second: A of shape (..., 10000, k) times W; W (m, k) first: W
+times B of shape (k, 10000)), in the graph's dtype and orientation, one thread, thread CPU time,
 median of 5 (printed as GFLOP/s). The FLOP-bound time is the counted FLOPs at that rate: the
 arithmetic the graph cannot avoid at the rate this machine achieves on dense products
 (for a graph whose products are all dense, such as nn-default's, it is numpy's time for
@@ -83,25 +84,48 @@ def designs(card: dict[str, Any], n: int, seed: int = 0) -> dict[str, np.ndarray
 
 def matmul_bound(graph: bytes, batch: int) -> tuple[float, float]:
     """(FLOPs per row of the graph's initializer matmuls, numpy's time for those matmuls at
-    ``batch`` rows [s])."""
+    ``batch`` rows [s]). An initializer matmul is a ``MatMul`` or ``Gemm`` with a constant
+    operand ``W``, on either side: the activation's rows times W (W second, or transposed by
+    ``transB``), or W times the activation's columns (W first, as the GP's mean
+    (alpha' @ K*')' is written); numpy times the same product in the same orientation."""
     model = onnx.load_from_string(graph)
     weights = {i.name: numpy_helper.to_array(i) for i in model.graph.initializer}
     flops, seconds = 0.0, 0.0
     rng = np.random.default_rng(0)
     for node in model.graph.node:
-        if node.op_type != "MatMul" or node.input[1] not in weights:
+        product = _initializer_product(node, weights, batch, rng)
+        if product is None:
             continue
-        w = weights[node.input[1]]
-        a = rng.standard_normal((*w.shape[:-2], batch, w.shape[-2])).astype(w.dtype)
+        w, run = product
         flops += 2.0 * w.size
-        a @ w
+        run()
         times = []
         for _ in range(5):
             t0 = time.thread_time()
-            a @ w
+            run()
             times.append(time.thread_time() - t0)
         seconds += statistics.median(times)
     return flops, seconds
+
+
+def _initializer_product(node: Any, weights: dict[str, np.ndarray], batch: int,
+                         rng: np.random.Generator) -> tuple[np.ndarray, Callable[[], Any]] | None:
+    """(W, numpy's product of ``batch`` random rows with W as ``node`` multiplies them), or
+    None when ``node`` is not a MatMul / Gemm with a constant operand."""
+    if node.op_type not in ("MatMul", "Gemm"):
+        return None
+    attrs = {t.name: t.i for t in node.attribute}
+    if node.input[1] in weights:
+        w = weights[node.input[1]]
+        w = w.T if attrs.get("transB") else w
+        a = rng.standard_normal((*w.shape[:-2], batch, w.shape[-2])).astype(w.dtype)
+        return w, lambda: a @ w
+    if node.input[0] in weights and weights[node.input[0]].ndim == 2:
+        w = weights[node.input[0]]
+        w = w.T if attrs.get("transA") else w
+        b = rng.standard_normal((w.shape[1], batch)).astype(w.dtype)
+        return w, lambda: w @ b
+    return None
 
 
 def _product_flops(a: tuple[int, ...], b: tuple[int, ...], node: Any) -> float:

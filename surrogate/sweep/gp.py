@@ -194,6 +194,16 @@ class SweepGP:
         self.fit_seconds_ = time.perf_counter() - t0
         return self
 
+    def variance_factor(self) -> np.ndarray:
+        """G (m, m) with |a|^2 - |a L_B^-T|^2 = |k_m G|^2 for a = k_m L_m^-T: the DTC variance
+        as one product, v = amp - |k_m G|^2 + noise. G = L_m^-T R, R R' = I - L_B^-T L_B^-1
+        (positive semidefinite: L_B L_B' = I + A with A >= 0, so its eigenvalues lie in
+        [0, 1)), R from its eigendecomposition with rounding's negative eigenvalues at 0.
+        One m x m product per design instead of two (the graph's: half the bytes read)."""
+        W = np.eye(len(self.LB_inv_T_)) - self.LB_inv_T_ @ self.LB_inv_T_.T
+        eigenvalues, vectors = np.linalg.eigh(W)
+        return self.Lm_inv_T_ @ (vectors * np.sqrt(np.clip(eigenvalues, 0.0, None)))
+
     def _k(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
         """amp * Matern 5/2 between rows of ``A`` and ``B`` (no noise)."""
         return self.kernel_.k1(A, B)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from embed_cases import EMBED, REPO, seal_copy  # noqa: F401  (re-exported to fixtures)
+from sweep_fixture import GP_OPTIONS, train_model
 
 
 @pytest.fixture(scope="session")
@@ -20,6 +21,13 @@ def sealed(tmp_path_factory) -> dict[str, Path]:
     """Sealed copies of nn-default, gp-default and nn-normal."""
     dest = tmp_path_factory.mktemp("sealed")
     return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default", "nn-normal")}
+
+
+@pytest.fixture(scope="session")
+def sweep_gp_model(sweep_dataset, tmp_path_factory) -> Path:
+    """A small sweep GP on the synthetic sweep dataset, with the normal component."""
+    return train_model(sweep_dataset, tmp_path_factory.mktemp("sweep-gp") / "gp-sweep-fixture",
+                       kind="gp", options=GP_OPTIONS)
 
 
 def _require(what: str) -> None:

@@ -46,6 +46,12 @@ def test_node_equals_python_on_a_sweep_model(node, sweep_model, tmp_path):
     _node_equals_python(node, sweep_model, 300, tmp_path)
 
 
+def test_node_equals_python_on_a_sweep_gp(node, sweep_gp_model, tmp_path):
+    """The float64 sweep GP's graph (its mean with alpha as the left operand, the DTC variance
+    as one product, the linearised log-std), read by the same JavaScript."""
+    _node_equals_python(node, sweep_gp_model, 300, tmp_path)
+
+
 def _node_equals_python(node: str, path: Path, n: int, tmp_path: Path) -> None:
     model = path.name
     predictor = load_predictor(path)

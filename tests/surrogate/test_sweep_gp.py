@@ -124,6 +124,21 @@ def test_the_variance_is_the_exact_gp_when_every_design_is_inducing(data, fitted
     assert np.all(np.diff(along) > 0) and along[-1] == pytest.approx(gp.amp_ + gp.noise_)
 
 
+@pytest.mark.parametrize("inducing", [8, 20, 10**4])
+def test_the_variance_factor_is_the_two_triangular_products_in_one(data, fitted, inducing):
+    _, targets, tr, _, _ = fitted
+    X = encode(data.codes, data.specs)
+    gp = SweepGP(inducing=inducing, scale="block").fit(X[tr], targets.transform(data.response[tr]))
+    k_m = gp._k(X, X[tr][gp.inducing_])
+    a = k_m @ gp.Lm_inv_T_
+    c = a @ gp.LB_inv_T_
+    G = gp.variance_factor()
+    assert G.shape == (gp.inducing_.size, gp.inducing_.size)
+    np.testing.assert_allclose(np.sum((k_m @ G) ** 2, axis=1),
+                               np.sum(a * a, axis=1) - np.sum(c * c, axis=1),
+                               rtol=1e-9, atol=1e-12 * gp.amp_)
+
+
 def test_the_mean_is_exact_whatever_the_inducing_set(data, fitted):
     _, targets, tr, _, _ = fitted
     X = encode(data.codes, data.specs)
