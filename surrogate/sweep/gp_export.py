@@ -18,11 +18,10 @@ from :meth:`surrogate.sweep.targets.BandTargets.band_basis` (one extra pair: the
 covariance for the edge / centre column). So the std costs a few hundred flops per row beside
 the decode. G (:meth:`SweepGP.variance_factor`) folds the DTC variance's two triangular
 products (amp - |a|^2 + |a L_B^-T|^2, a = K*[:, inducing] L_m^-T) into one; alpha is the
-left operand of the mean's product. Both because onnxruntime's float64 products read their
-constant operand at a fraction of the memory rate numpy's reach at one design, so the bytes
-read are the time: at one design the graph went from 1.04-1.20 ms to 0.63-0.65 ms (the
-variance's fold 0.3-0.4 ms of it), 1.7e-14 relative in log_std (``bench/runtime/predict.py``).
-This module uses only the decoder's public behaviour (``components``,
+left operand of the mean's product. Both because at one design onnxruntime's float64
+products read their constant operand at a fraction of the memory rate numpy's reach, so the
+bytes read are the time (docs/sweep-models.md, "The shipped models' cost"). This module uses
+only the decoder's public behaviour (``components``,
 ``log_outputs``). :func:`gp_parity` checks the graph against the numpy rebuild
 (:meth:`SweepGP.predict`, :func:`surrogate.sweep.export.reference_log_outputs`,
 :func:`surrogate.sweep.gp.linearised_log_std`, all float64).
