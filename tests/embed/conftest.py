@@ -18,9 +18,10 @@ from sweep_fixture import GP_OPTIONS, train_model
 
 @pytest.fixture(scope="session")
 def sealed(tmp_path_factory) -> dict[str, Path]:
-    """Sealed copies of nn-default, gp-default and nn-normal."""
+    """Sealed copies of nn-default, gp-default, nn-normal and the shipped sweep defaults."""
     dest = tmp_path_factory.mktemp("sealed")
-    return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default", "nn-normal")}
+    return {m: seal_copy(m, dest) for m in ("nn-default", "gp-default", "nn-normal", "nn-sweep",
+                                            "gp-sweep")}
 
 
 @pytest.fixture(scope="session")

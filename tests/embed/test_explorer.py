@@ -22,7 +22,7 @@ SCALE = 2.1  # the largest interval_calibration factor of the shipped models (nn
 Z95 = 1.959964
 
 
-@pytest.fixture(scope="module", params=["nn-default", "sweep"])
+@pytest.fixture(scope="module", params=["nn-default", "sweep", "gp-sweep"])
 def page(request, chromium, node, sealed, tmp_path_factory):
     """Build, serve, drive the page once per model (nn-default; a sweep-trained model, its
     profile to 40 mm); the check script's report and the designs."""

@@ -35,7 +35,8 @@ def max_rel(a, b) -> float:
 
 
 @pytest.mark.parametrize(("model", "n"), [("nn-default", 1000), ("gp-default", 200),
-                                          ("nn-normal", 300)])
+                                          ("nn-normal", 300), ("nn-sweep", 300),
+                                          ("gp-sweep", 300)])
 def test_node_equals_python_on_random_designs(node, sealed, tmp_path, model, n):
     _node_equals_python(node, sealed[model], n, tmp_path)
 
