@@ -7,7 +7,8 @@ solve of the same scene at that frequency (so that a large error is known to be 
 not the reduced-order sweep's).
 
     .venv/bin/python bench/surrogate/worst_designs.py --model models/nn-sweep \
-        --test-data datasets/default-sweep-test [--worst 6] [--no-resolve]
+        --test-data datasets/default-sweep-test [--worst 6] [--no-resolve] \
+        [--by-attachment datasets/default-sweep]
 
 One line per design, worst first: the error on the field's scale, the output and frequency,
 model / sweep / direct values [um], whether the model's 95 % interval holds the FE value, then
@@ -26,9 +27,11 @@ import numpy as np
 import fem
 from fem.scene import scene_from_dict
 from surrogate.data.store import Store
+from surrogate.intervals import calibrate, residuals
 from surrogate.runtime.predictor import load_predictor
 from surrogate.sweep.scoring import named_inputs, predict_pairs
 from surrogate.sweep.targets import load_sweep_datasets, pair_rows
+from surrogate.train import split
 
 OUTPUTS = (("centre", "center_amplitude_um"), ("edge", "edge_amplitude_um"))
 Z95 = 1.959964
@@ -106,13 +109,61 @@ def by_group(model: str, test_dir: str) -> list[str]:
     return lines
 
 
+def by_attachment_calibration(model: str, train_dir: str, test_dir: str) -> list[str]:
+    """What intervals calibrated per attachment (a Mondrian split of the conformal scores)
+    would cover, against the card's one calibration over all designs: both calibrated here the
+    same way (:func:`surrogate.intervals.calibrate`, hierarchical by design) on every design
+    the model's training held out of ``train_dir`` (the card's seed and test fraction), the
+    model's raw log-std, then scored on ``test_dir`` by group (centre / edge coverage)."""
+    card = load_predictor(model).card
+    raw = load_predictor(model, calibrated=False)
+    extra = list(raw.extra_outputs)
+    train, test = load_sweep_datasets([train_dir]), load_sweep_datasets([test_dir])
+    _, held = split(len(train.codes), float(card["training"]["test_fraction"]),
+                    int(card["training"]["seed"]))
+
+    def scores(data: Any, designs: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        codes, centre, profile, ext = pair_rows(data, designs, "profile_normal_um" in extra)
+        return (residuals(raw.predict(codes), centre, profile, ext),
+                named_inputs(codes, data.all_specs))
+
+    r_cal, x_cal = scores(train, held)
+    r_test, x_test = scores(test, np.arange(len(test.codes)))
+    design = np.repeat(held, train.band_hz.size)
+    pooled = np.asarray(calibrate(r_cal, extra=extra, group=design)["log_std_scale"])
+    scale = np.empty_like(r_test)
+    lines = []
+    for choice in np.unique(x_cal["attachment"]):
+        rows = x_cal["attachment"] == choice
+        factor = np.asarray(calibrate(r_cal[rows], extra=extra, group=design[rows])
+                            ["log_std_scale"])
+        scale[x_test["attachment"] == choice] = factor
+        lines.append(f"  {choice}: factors centre {factor[0]:.3g}, edge {factor[1]:.3g} "
+                     f"(all designs: {pooled[0]:.3g}, {pooled[1]:.3g})")
+    for group, rule in GROUPS:
+        rows = rule(x_test)
+        one = (r_test[rows, :2] <= Z95 * pooled[None, :2]).mean(axis=0)
+        split_ = (r_test[rows, :2] <= Z95 * scale[rows, :2]).mean(axis=0)
+        lines.append(f"  {group}: coverage centre / edge {100 * one[0]:.1f} / {100 * one[1]:.1f} % "
+                     f"calibrated over all designs, {100 * split_[0]:.1f} / {100 * split_[1]:.1f} "
+                     "% per attachment")
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", default="models/nn-sweep", help="a sweep model directory")
     ap.add_argument("--test-data", default="datasets/default-sweep-test")
     ap.add_argument("--worst", type=int, default=6, help="designs listed (default 6)")
     ap.add_argument("--no-resolve", action="store_true", help="skip the direct FE re-solves")
+    ap.add_argument("--by-attachment", metavar="TRAIN_DIR", default=None,
+                    help="also: the coverage if the intervals were calibrated per attachment on "
+                    "the designs the model's training held out of TRAIN_DIR (its dataset)")
     args = ap.parse_args()
+    if args.by_attachment:
+        print(f"{args.model}: intervals calibrated per attachment, on {args.test_data}:")
+        print("\n".join(by_attachment_calibration(args.model, args.by_attachment,
+                                                   args.test_data)))
     print(f"{args.model} on {args.test_data}, by group of designs (every band frequency):")
     print("\n".join(by_group(args.model, args.test_data)))
     rows = worst_pairs(args.model, args.test_data, args.worst)
