@@ -44,7 +44,7 @@ from surrogate.sweep.gp import SweepGP, fit_sweep_gp, linearised_log_std, split_
 from surrogate.sweep.targets import TINY, BandTargets, SweepData, Z, pair_rows
 
 __all__ = ["GP_PARITY_TOL", "SWEEP", "SweepGPModule", "covariance_tables", "export_sweep_gp",
-           "gp_parity"]
+           "gp_parity", "std_difference"]
 
 #: Largest |d ln| of log_mean, and relative difference of log_std (of :data:`STD_FLOOR`),
 #: between the float64 graph and the float64 rebuild at every band frequency of held-out
@@ -184,6 +184,12 @@ def reference_gp_outputs(est: SweepGP, targets: BandTargets, X: np.ndarray, inde
                                                  est.y_std_, normal, z[0].numpy())
 
 
+def std_difference(got: np.ndarray, ref: np.ndarray) -> float:
+    """The largest relative difference of log-stds ``got`` from ``ref``, taken of the
+    variances: |got^2 - ref^2| / (2 max(ref, :data:`STD_FLOOR`)^2)."""
+    return float(np.max(np.abs(got**2 - ref**2) / (2.0 * np.maximum(ref, STD_FLOOR) ** 2)))
+
+
 def gp_parity(est: SweepGP, targets: BandTargets, session: Any, data: SweepData,
               specs: list[Any], designs: np.ndarray, normal: bool) -> dict[str, float]:
     """Largest |d ln| between the graph ``session`` and the rebuild of
@@ -202,8 +208,7 @@ def gp_parity(est: SweepGP, targets: BandTargets, session: Any, data: SweepData,
     got_mean, got_std = session.run(["log_mean", "log_std"],
                                     {"x": encode(codes, specs).astype(np.float64)})
     out = {"log_mean": float(np.abs(got_mean - eager).max()),
-           "log_std_rel": float(np.max(np.abs(got_std**2 - ref_std**2)
-                                       / (2.0 * np.maximum(ref_std, STD_FLOOR) ** 2))),
+           "log_std_rel": std_difference(got_std, ref_std),
            "log_mean_vs_float64_basis": float(np.abs(got_mean - numpy_mean).max())}
     if not out["log_mean"] <= GP_PARITY_TOL:
         raise RuntimeError(f"exported sweep GP's log_mean differs from its numpy rebuild by "

@@ -24,8 +24,9 @@ Z95 = 1.959964
 
 @pytest.fixture(scope="module", params=["nn-default", "sweep", "gp-sweep"])
 def page(request, chromium, node, sealed, tmp_path_factory):
-    """Build, serve, drive the page once per model (nn-default; a sweep-trained model, its
-    profile to 40 mm); the check script's report and the designs."""
+    """Build, serve, drive the page once per model (nn-default; a sweep-trained network, its
+    profile to 40 mm; the shipped float64 sweep GP); the check script's report and the
+    designs."""
     model = (request.getfixturevalue("sweep_model") if request.param == "sweep" else
              sealed[request.param])
     tmp = tmp_path_factory.mktemp("explorer")

@@ -12,7 +12,7 @@ from surrogate.runtime.encoding import encode
 from surrogate.runtime.predictor import load_predictor, make_session
 from surrogate.sweep.export import reference_log_outputs
 from surrogate.sweep.gp import JITTER, SweepGP, fit_sweep_gp, linearised_log_std, split_gp_options
-from surrogate.sweep.gp_export import export_sweep_gp, gp_parity
+from surrogate.sweep.gp_export import GP_PARITY_TOL, export_sweep_gp, gp_parity, std_difference
 from surrogate.sweep.targets import load_sweep_datasets, log_magnitudes, log_output_columns
 from surrogate.sweep.train import train_sweep
 from surrogate.train import split
@@ -85,6 +85,16 @@ def test_the_parity_check_passes_and_catches_a_wrong_graph(data, fitted):
     wrong = export_sweep_gp(est, targets, False, BAND_HZ[0], BAND_HZ[-1] + 10.0, data.band_hz, {})
     with pytest.raises(RuntimeError, match="log_mean differs from its numpy rebuild"):
         gp_parity(est, targets, make_session(wrong), data, data.all_specs, te, False)
+
+
+def test_the_std_parity_ignores_the_square_root_of_rounding_and_sees_a_real_difference():
+    # the edge / centre column where centre and edge move together: a variance of rounding
+    # (6e-17) on one side, exactly 0 on the other, is a std of 7.8e-9 against 0
+    assert std_difference(np.array([0.0]), np.array([7.8e-9])) < 1e-10
+    # above the floor the measure is |d std| / std to first order
+    assert std_difference(np.array([0.2 * (1 + 2e-6)]), np.array([0.2])) == pytest.approx(
+        2e-6, rel=1e-3)
+    assert std_difference(np.array([1.01e-3]), np.array([1e-3])) > GP_PARITY_TOL
 
 
 def test_the_linearised_std_is_the_first_order_propagation(data, fitted):
