@@ -406,8 +406,8 @@ def fit_sweep_error(predictor, component: str, path: Path,
     rho at those df. Last, per output, how SURROGATE_ERROR_T and the t of the model's card
     (calibration.fit.CARD_ERROR_KEY), if any, fit the same errors (:func:`current_t_check`).
     Returns the printed lines and what was measured: {"outputs": {output: the t as the card
-    holds it (rounded as printed)}, "scale_hz", "n_designs", "frequencies_hz",
-    "profile_mm"} (:func:`error_t_entry` makes the card's entry of it)."""
+    holds it (rounded as printed)}, "scale_hz" (the frequencies measured, where the scales
+    are), "n_designs", "profile_mm"} (:func:`error_t_entry` makes the card's entry of it)."""
     from scipy.optimize import minimize_scalar
 
     from calibration.fit import card_error_t, surrogate_error_t
@@ -423,9 +423,8 @@ def fit_sweep_error(predictor, component: str, path: Path,
     n_designs = int(next(iter(sweep.values()))[0].shape[0])
     own = card_error_t(predictor.card)  # checked before an hour of fitting, not after
     fitted: dict[str, Any] = {"outputs": {}, "scale_hz": [float(x) for x in f],
-                              "n_designs": n_designs, "frequencies_hz": [float(x) for x in f],
-                              "profile_mm": [float(x) for x in dist]}
-    lines = [f"  sweep dataset {path}: {next(iter(sweep.values()))[0].shape[0]} designs x "
+                              "n_designs": n_designs, "profile_mm": [float(x) for x in dist]}
+    lines = [f"  sweep dataset {path}: {n_designs} designs x "
              f"{f.size} frequencies ({f[0]:g}-{f[-1]:g} Hz every {SWEEP_STEP_HZ:g}), profile "
              f"points {dist[0]:g}-{dist[-1]:g} mm every {dist[1] - dist[0]:g} mm"]
     for name in outputs:
@@ -486,7 +485,7 @@ def fit_sweep_error(predictor, component: str, path: Path,
             **({} if length is None else {"length_mm": float(length)})}
         checks = {"SURROGATE_ERROR_T": surrogate_error_t(name)}
         if name in own:
-            checks["the model card's t"] = surrogate_error_t(name, predictor.card)
+            checks["the model card's t"] = own[name]
         lines += [current_t_check(x, f, dist, name, nu, c, length, t, f"{label}[{name!r}]")
                   for label, t in checks.items()]
     return lines, fitted
@@ -518,7 +517,7 @@ def error_t_entry(predictor, fitted: dict[str, Any], sweep: Path, designs: Path 
                         "space_hash": manifest.get("space_hash"),
                         "designs": "all" if dfile is None else dfile,
                         "n_designs": fitted["n_designs"],
-                        "frequencies_hz": fitted["frequencies_hz"],
+                        "frequencies_hz": fitted["scale_hz"],
                         "profile_mm": fitted["profile_mm"]},
         "command": command,
         "measured": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")}

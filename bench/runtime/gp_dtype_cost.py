@@ -40,9 +40,9 @@ def kernel_mean_graph(n_designs: int, dtype: type, alpha_left: bool = False) -> 
     rng = np.random.default_rng(0)
     consts = {"XT": rng.random((FEATURES, n_designs)), "Xsq": rng.random(n_designs),
               "alpha": rng.standard_normal((n_designs, TARGETS)), "two": np.array(2.0),
-              "alpha_T": rng.standard_normal((TARGETS, n_designs)),
               "five": np.array(5.0), "c53": np.array(5.0 / 3.0), "one": np.array(1.0)}
-    consts.pop("alpha" if alpha_left else "alpha_T")
+    if alpha_left:  # stored as the export stores it
+        consts["alpha_T"] = consts.pop("alpha").T.copy()
     inits = [numpy_helper.from_array(v.astype(dtype), k) for k, v in consts.items()]
     steps = [("Mul", ["x", "x"], "xx"), ("ReduceSum", ["xx"], "xsq"), ("MatMul", ["x", "XT"], "xX"),
              ("Mul", ["xX", "two"], "xX2"), ("Sub", ["xsq", "xX2"], "a"),

@@ -6,9 +6,10 @@ elementwise, gathers, other) and the largest single nodes, one thread.
 
 The batch defaults to the predictor's chunk (``surrogate.runtime.predictor.CHUNK_ROWS``), the
 rows one graph call sees when ``Predictor.predict`` answers a large batch. Features are random
-in [0, 1] (the encoded range). A product's rate is printed for the largest one: its FLOPs (from
-the operand shapes the profiler records) over its time. This is what explains a ratio of
-``bench/runtime/predict.py`` above the FLOP-bound: the bound counts products only.
+in [0, 1] (the encoded range). A product's rate is printed beside its time: its FLOPs, counted
+as ``bench/runtime/predict.py`` counts them (its ``graph_flops``), over its time. This is what
+explains a ratio of ``bench/runtime/predict.py`` above the FLOP-bound: the bound counts
+products only.
 """
 
 from __future__ import annotations
@@ -22,14 +23,15 @@ import tempfile
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
+import onnx
 import onnxruntime as ort
+from predict import graph_flops
 
 from surrogate.runtime import find_model, load_model
 from surrogate.runtime.card import read_model_file
 from surrogate.runtime.predictor import CHUNK_ROWS
 
-PRODUCTS = ("Gemm", "MatMul", "FusedMatMul")
-KINDS = {"product": PRODUCTS, "exp / sqrt": ("Exp", "Sqrt", "Log", "Pow"),
+KINDS = {"product": ("Gemm", "MatMul", "FusedMatMul"), "exp / sqrt": ("Exp", "Sqrt", "Log", "Pow"),
          "gather": ("Gather", "GatherElements", "GatherND"),
          "elementwise": ("Mul", "Add", "Sub", "Div", "Neg", "Relu", "Clip", "Min", "Max", "Abs")}
 
@@ -60,17 +62,6 @@ def profile(graph: bytes, batch: int, calls: int, dtype: type) -> list[dict]:
             and e["name"].endswith("_kernel_time")]
 
 
-def product_flops(event: dict) -> float:
-    """2 n k m of a product node's event from its recorded operand shapes (0 if not known)."""
-    shapes = [next(iter(s.values())) for s in event["args"].get("input_type_shape", [])]
-    out = [next(iter(s.values())) for s in event["args"].get("output_type_shape", [])]
-    if len(shapes) < 2 or not out:
-        return 0.0
-    a = shapes[0]
-    k = a[-2] if event["args"].get("op_name") == "Gemm" and a[-1] == out[0][0] else a[-1]
-    return 2.0 * float(np.prod(out[0])) * k
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", default="gp-sweep", help="a shipped model's name or directory")
@@ -84,14 +75,16 @@ def main() -> None:
     graph = read_model_file(path, card, card["graph"]["file"])
     dtype = np.float64 if card["graph"]["dtype"] == "float64" else np.float32
     events = profile(graph, args.batch, args.calls, dtype)
+    width = onnx.load_from_string(graph).graph.input[0].type.tensor_type.shape.dim[1].dim_value
+    flops_per_row = dict(graph_flops(graph, width)[1])
     by_kind, by_node = collections.Counter(), collections.Counter()
     flops = {}
     for e in events:
         name, op = e["name"][:-len("_kernel_time")], e["args"]["op_name"]
         by_kind[kind_of(op)] += e["dur"]
         by_node[f"{op} {name}"] += e["dur"]
-        if op in PRODUCTS:
-            flops[f"{op} {name}"] = product_flops(e)
+        # a fused node keeps its first node's name before the "/" (node_matmul_1/...Fusion/)
+        flops[f"{op} {name}"] = flops_per_row.get(name.split("/")[0], 0.0) * args.batch
     total = sum(by_kind.values())
     print(f"{path.name}: batch {args.batch}, {args.calls} calls, one thread; node kernel time "
           f"{total / args.calls / 1e3:.2f} ms a call")

@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,14 +28,13 @@ import numpy as np
 import fem
 from fem.scene import scene_from_dict
 from surrogate.data.store import Store
-from surrogate.intervals import calibrate, residuals
-from surrogate.runtime.predictor import load_predictor
-from surrogate.sweep.scoring import named_inputs, predict_pairs
-from surrogate.sweep.targets import load_sweep_datasets, pair_rows
+from surrogate.intervals import Z95, calibrate, residuals
+from surrogate.runtime.predictor import Predictor, load_predictor
+from surrogate.sweep.scoring import named_inputs, predict_pairs, score_pairs
+from surrogate.sweep.targets import SweepData, load_sweep_datasets, pair_rows
 from surrogate.train import split
 
 OUTPUTS = (("centre", "center_amplitude_um"), ("edge", "edge_amplitude_um"))
-Z95 = 1.959964
 
 
 def harmonic_scene(sweep_scene: dict[str, Any], frequency_hz: float) -> dict[str, Any]:
@@ -46,30 +46,50 @@ def harmonic_scene(sweep_scene: dict[str, Any], frequency_hz: float) -> dict[str
     return scene
 
 
-def worst_pairs(model: str, test_dir: str, k: int) -> list[dict[str, Any]]:
-    """The ``k`` designs of ``test_dir`` with the largest error of ``model`` on the field's
-    scale, each at its worst pair: design index, output, frequency [Hz], model and FE [um]."""
-    test = load_sweep_datasets([test_dir])
-    codes, centre, profile, _ = pair_rows(test, np.arange(len(test.codes)))
-    pred = predict_pairs(load_predictor(model), test, codes)
-    field = np.maximum(centre, profile[:, 0])
-    truth = {"centre": centre, "edge": profile[:, 0]}
-    err = np.stack([np.abs(pred[key] - truth[name]) / field for name, key in OUTPUTS])
-    n_f = test.band_hz.size
-    per_design = err.reshape(len(OUTPUTS), len(test.codes), n_f)
-    worst_of = per_design.max(axis=(0, 2))
+@dataclass
+class Scored:
+    """A model's answers at every (design, band frequency) pair of a test set, once: the
+    data, its pairs' FE centre and profile [um], the answers (:func:`predict_pairs`) and the
+    pairs' named inputs."""
+
+    test: SweepData
+    centre: np.ndarray
+    profile: np.ndarray
+    pred: dict[str, np.ndarray]
+    inputs: dict[str, np.ndarray]
+
+    @classmethod
+    def of(cls, predictor: Predictor, test: SweepData) -> Scored:
+        codes, centre, profile, _ = pair_rows(test, np.arange(len(test.codes)))
+        return cls(test, centre, profile, predict_pairs(predictor, test, codes),
+                   named_inputs(codes, test.all_specs))
+
+    def subset(self, rows: np.ndarray) -> dict[str, np.ndarray]:
+        """The answers at the pairs ``rows`` (the profile grid kept whole)."""
+        n = len(self.centre)
+        return {k: (v[rows] if np.ndim(v) and len(v) == n else v) for k, v in self.pred.items()}
+
+
+def worst_pairs(s: Scored, k: int) -> list[dict[str, Any]]:
+    """The ``k`` designs with the largest error on the field's scale, each at its worst
+    pair: design index, output, frequency [Hz], model and FE [um], the model's 95 % interval
+    [um] (from its calibrated log-std)."""
+    field = np.maximum(s.centre, s.profile[:, 0])
+    truth = {"centre": s.centre, "edge": s.profile[:, 0]}
+    err = np.stack([np.abs(s.pred[key] - truth[name]) / field for name, key in OUTPUTS])
+    n_f = s.test.band_hz.size
+    per_design = err.reshape(len(OUTPUTS), len(s.test.codes), n_f)
     rows = []
-    for d in np.argsort(worst_of)[::-1][:k]:
+    for d in np.argsort(per_design.max(axis=(0, 2)))[::-1][:k]:
         o, f = np.unravel_index(per_design[:, d].argmax(), (len(OUTPUTS), n_f))
         name, key = OUTPUTS[o]
         pair = d * n_f + f
-        # the model's 95 % interval at the pair (its calibrated log-std), if it has one
-        log_std = pred.get(f"{key}_log_std", np.full(len(field), np.nan))[pair]
-        rows.append({"design": int(d), "output": name, "frequency_hz": float(test.band_hz[f]),
-                     "error_over_field": float(per_design[o, d, f]),
-                     "model_um": float(pred[key][pair]), "sweep_um": float(truth[name][pair]),
-                     "interval_um": (float(pred[key][pair] * np.exp(-Z95 * log_std)),
-                                     float(pred[key][pair] * np.exp(Z95 * log_std)))})
+        value, log_std = s.pred[key][pair], s.pred[f"{key}_log_std"][pair]
+        rows.append({"design": int(d), "output": name, "frequency_hz": float(s.test.band_hz[f]),
+                     "error_over_field": float(per_design[o, d, f]), "model_um": float(value),
+                     "sweep_um": float(truth[name][pair]),
+                     "interval_um": (float(value * np.exp(-Z95 * log_std)),
+                                     float(value * np.exp(Z95 * log_std)))})
     return rows
 
 
@@ -88,41 +108,33 @@ GROUPS = (
 )
 
 
-def by_group(model: str, test_dir: str) -> list[str]:
-    """Per :data:`GROUPS` and output: designs, p95 relative error and the 95 % interval's
-    coverage of the FE values over the group's (design, frequency) pairs."""
-    test = load_sweep_datasets([test_dir])
-    codes, centre, profile, _ = pair_rows(test, np.arange(len(test.codes)))
-    pred = predict_pairs(load_predictor(model), test, codes)
-    inputs = named_inputs(codes, test.all_specs)
+def by_group(s: Scored) -> list[str]:
+    """Per :data:`GROUPS`: designs, and per output the p95 relative error and the 95 %
+    interval's coverage of the FE values over the group's pairs, as the cards score them
+    (:func:`surrogate.sweep.scoring.score_pairs`)."""
     lines = []
     for group, rule in GROUPS:
-        rows = rule(inputs)
-        parts = []
-        for (name, key), y in zip(OUTPUTS, (centre, profile[:, 0]), strict=True):
-            p, s = pred[key][rows], pred[f"{key}_log_std"][rows]
-            inside = np.abs(np.log(y[rows] / p)) <= Z95 * s
-            parts.append(f"{name} p95 {100 * np.percentile(np.abs(p / y[rows] - 1), 95):.1f} %, "
-                         f"coverage {100 * inside.mean():.1f} %")
-        lines.append(f"  {group} ({rows.sum() // test.band_hz.size} designs): "
-                     + "; ".join(parts))
+        rows = rule(s.inputs)
+        got = score_pairs(s.subset(rows), s.centre[rows], s.profile[rows], s.test.grid_mm)
+        lines.append(f"  {group} ({rows.sum() // s.test.band_hz.size} designs): " + "; ".join(
+            f"{name} p95 {100 * got[name][1]:.1f} %, coverage "
+            f"{100 * got[f'{name}_coverage95']:.1f} %" for name, _ in OUTPUTS))
     return lines
 
 
-def by_attachment_calibration(model: str, train_dir: str, test_dir: str) -> list[str]:
+def by_attachment_calibration(model: str, train_dir: str, test: SweepData) -> list[str]:
     """What intervals calibrated per attachment (a Mondrian split of the conformal scores)
     would cover, against the card's one calibration over all designs: both calibrated here the
     same way (:func:`surrogate.intervals.calibrate`, hierarchical by design) on every design
     the model's training held out of ``train_dir`` (the card's seed and test fraction), the
-    model's raw log-std, then scored on ``test_dir`` by group (centre / edge coverage)."""
-    card = load_predictor(model).card
+    model's raw log-std, then scored on ``test`` by group (centre / edge coverage)."""
     raw = load_predictor(model, calibrated=False)
     extra = list(raw.extra_outputs)
-    train, test = load_sweep_datasets([train_dir]), load_sweep_datasets([test_dir])
-    _, held = split(len(train.codes), float(card["training"]["test_fraction"]),
-                    int(card["training"]["seed"]))
+    train = load_sweep_datasets([train_dir])
+    _, held = split(len(train.codes), float(raw.card["training"]["test_fraction"]),
+                    int(raw.card["training"]["seed"]))
 
-    def scores(data: Any, designs: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    def scores(data: SweepData, designs: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         codes, centre, profile, ext = pair_rows(data, designs, "profile_normal_um" in extra)
         return (residuals(raw.predict(codes), centre, profile, ext),
                 named_inputs(codes, data.all_specs))
@@ -160,17 +172,19 @@ def main() -> None:
                     help="also: the coverage if the intervals were calibrated per attachment on "
                     "the designs the model's training held out of TRAIN_DIR (its dataset)")
     args = ap.parse_args()
+    predictor = load_predictor(args.model)
+    test = load_sweep_datasets([args.test_data])
     if args.by_attachment:
         print(f"{args.model}: intervals calibrated per attachment, on {args.test_data}:")
-        print("\n".join(by_attachment_calibration(args.model, args.by_attachment,
-                                                   args.test_data)))
+        print("\n".join(by_attachment_calibration(args.model, args.by_attachment, test)))
+    scored = Scored.of(predictor, test)
     print(f"{args.model} on {args.test_data}, by group of designs (every band frequency):")
-    print("\n".join(by_group(args.model, args.test_data)))
-    rows = worst_pairs(args.model, args.test_data, args.worst)
+    print("\n".join(by_group(scored)))
+    rows = worst_pairs(scored, args.worst)
     table = Store.open(args.test_data).read()
     table = table[table["status"] == "ok"].sort_values("sample_index", kind="stable")
     table = table.reset_index(drop=True)
-    inputs = [s.name for s in load_predictor(args.model).specs if s.name != "frequency_hz"]
+    inputs = [spec.name for spec in test.specs]
     print(f"{args.model} on {args.test_data}: the {len(rows)} designs with the largest error on "
           "the field's scale, each at its worst pair")
     for r in rows:
